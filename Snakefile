@@ -1,0 +1,30 @@
+# Identification of skin layer elasticity from suction tests: the study workflow.
+#
+#   snakemake --cores 2                               # the paper's study
+#   snakemake --cores 2 --configfile config/ci.yaml   # coarse, a few minutes
+#   snakemake --profile profiles/slurm                # on a SLURM cluster
+#   snakemake --report report.html                    # figures with captions
+#
+# config -> FE curves (one job per grid point) -> simulated spaces -> figures
+
+
+configfile: "config/config.yaml"
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/simulate.smk"
+include: "workflow/rules/space.smk"
+include: "workflow/rules/figures.smk"
+
+
+report: "workflow/report/workflow.rst"
+
+
+localrules:
+    all,
+
+
+rule all:
+    input:
+        final_outputs(),
+    default_target: True

@@ -1,0 +1,65 @@
+"""Identification of the elastic properties of skin layers from suction tests.
+
+Two-layer (dermis over hypodermis) axisymmetric FE model of the suction
+(Cutometer) test, simulated spaces of apex-deflection curves on parameter grids,
+and inverse identification against measured curves.
+
+The public names are imported lazily, so ``import skinsuction`` is cheap and does
+not need the FE stack until it is used:
+
+>>> import skinsuction
+>>> skinsuction.expand_axis({"start": 0, "stop": 100, "step": 2})[-1]
+100.0
+
+``skinsuction.simulate`` and ``skinsuction.Curve`` come from
+:mod:`skinsuction.model`; ``read_space`` and ``SimulatedSpace`` from
+:mod:`skinsuction.space`.
+"""
+
+from importlib import import_module as _import_module
+from importlib import metadata as _metadata
+
+try:
+    __version__ = _metadata.version("skinsuction")
+except _metadata.PackageNotFoundError:  # run from a source tree
+    __version__ = "0.1.0+src"
+
+#: public name -> module that defines it
+_EXPORTS = {
+    # forward model
+    "simulate": "skinsuction.model",
+    "Curve": "skinsuction.model",
+    # simulated space
+    "SimulatedSpace": "skinsuction.space",
+    "read_space": "skinsuction.space",
+    "assemble_space": "skinsuction.space",
+    "write_curve": "skinsuction.space",
+    "read_curve": "skinsuction.space",
+    "expand_axis": "skinsuction.space",
+    "grid_points": "skinsuction.space",
+    "point_id": "skinsuction.space",
+    "parse_point_id": "skinsuction.space",
+    "convergence_summary": "skinsuction.space",
+    # provenance
+    "provenance": "skinsuction.provenance",
+    # figures
+    "plot_fig3": "skinsuction.figures.fig3",
+}
+
+__all__ = sorted(_EXPORTS) + ["__version__"]
+
+
+def __getattr__(name):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'skinsuction' has no attribute {name!r}")
+    if name == "provenance":
+        value = _import_module(module)
+    else:
+        value = getattr(_import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))

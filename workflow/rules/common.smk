@@ -1,0 +1,103 @@
+"""Configuration check, grid points as wildcards, code hashes and target lists."""
+
+import os
+import re
+import sys
+from pathlib import Path
+
+from snakemake.exceptions import WorkflowError
+from snakemake.utils import min_version, validate
+
+min_version("9.0")
+
+
+# The workflow runs (and hashes, see code_hash) the package sources next to it,
+# not another installed copy: put src/ first on the path of this process and of
+# the script jobs it starts (they inherit the environment).
+SRC = Path(workflow.basedir) / "src"
+sys.path.insert(0, str(SRC))
+os.environ.update(
+    PYTHONPATH=os.pathsep.join(p for p in (str(SRC), os.environ.get("PYTHONPATH")) if p)
+)
+
+from skinsuction.provenance import source_hash  # noqa: E402
+from skinsuction.space import POINT_ID_PATTERN, expand_axis, grid_points, point_id  # noqa: E402
+
+
+# ---------------------------------------------------------------- configuration
+validate(config, schema="../schemas/config.schema.yaml")
+
+
+def _config_error(key, err):
+    return WorkflowError(f"Invalid configuration value for '{key}': {err}")
+
+
+try:
+    PRESSURES = expand_axis(config["pressures_mbar"])
+except ValueError as err:
+    raise _config_error("pressures_mbar", err)
+if PRESSURES[0] != 0 or PRESSURES != sorted(PRESSURES):
+    raise _config_error("pressures_mbar", f"must be ascending from 0, got {PRESSURES}")
+
+# grid points (as point ids) of every simulated space and of Figure 3
+SPACE_POINTS = {}
+for _name, _spec in config["spaces"].items():
+    try:
+        SPACE_POINTS[_name] = [point_id(p) for p in grid_points(_spec)]
+    except ValueError as err:
+        raise _config_error(f"spaces.{_name}", err)
+
+try:
+    FIG3_POINTS = [
+        point_id(p) for p in grid_points(config["figure3"], ignore=("pressure_mbar",))
+    ]
+except ValueError as err:
+    raise _config_error("figure3", err)
+FIG3_PRESSURE = config["figure3"].get("pressure_mbar", PRESSURES[-1])
+if FIG3_PRESSURE not in PRESSURES:
+    raise _config_error(
+        "figure3.pressure_mbar", f"{FIG3_PRESSURE} is not among pressures_mbar"
+    )
+
+ALL_POINTS = sorted(set(FIG3_POINTS).union(*SPACE_POINTS.values()))
+
+
+wildcard_constraints:
+    point=POINT_ID_PATTERN,
+    space="|".join(map(re.escape, SPACE_POINTS)),
+
+
+# ------------------------------------------------------------------- code hashes
+def code_hash(*parts):
+    """Hash of package sources (relative to src/skinsuction), used as a rule param.
+
+    Snakemake does not track imported modules; a param that changes with the
+    code makes a changed module rerun exactly the rules that depend on it.
+    """
+    return source_hash(*parts, root=SRC / "skinsuction")
+
+
+# ------------------------------------------------------------------ input lists
+def curve_file(point):
+    return f"results/curves/{point}.parquet"
+
+
+def space_curves(wildcards):
+    """Curve files of the grid points of one simulated space."""
+    return [curve_file(p) for p in SPACE_POINTS[wildcards.space]]
+
+
+def fig3_curves(wildcards):
+    """Curve files of the grid points of Figure 3."""
+    return [curve_file(p) for p in FIG3_POINTS]
+
+
+def final_outputs():
+    """Everything `rule all` builds."""
+    return [
+        *expand("results/simulated_space/{space}.parquet", space=SPACE_POINTS),
+        *expand("results/tables/{space}_convergence.csv", space=SPACE_POINTS),
+        "results/figures/fig3_boundary_conditions.png",
+        "results/figures/fig3_boundary_conditions.pdf",
+        "results/tables/fig3_boundary_conditions.csv",
+    ]
