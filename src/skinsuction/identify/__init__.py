@@ -1,0 +1,79 @@
+"""Identification of the dermis and hypodermis moduli from suction curves.
+
+Paper sections 2.3-2.4 and 3.2-3.3: a measured curve M(p) is compared with the
+simulated space Omega_s(X1d, X1h, p), interpolated off the grid by cubic
+Lagrange interpolation, through a cost function (single probe, weighted or
+ratio of the 2 mm and 6 mm probes) that the window focusing stochastic
+algorithm minimises.
+
+Examples
+--------
+>>> from skinsuction.identify import (analytic_surrogate_space, evaluate,
+...                                   single_objective, window_focusing)
+>>> s6 = analytic_surrogate_space(6.0)          # stands in for the FE space
+>>> curve = (s6.pressure_mbar, evaluate(s6, [[0.0055, 0.00041]])[0])
+>>> result = window_focusing(single_objective(s6, curve), seed=0)
+>>> result.estimate.round(6).tolist(), result.E_um < 1e-3
+([0.0055, 0.00041], True)
+"""
+
+from ._baselines import BaselineResult, differential_evolution_fit, least_squares_from_random_starts
+from ._interpolate import LagrangeAxis, SpaceInterpolant, evaluate, interpolate_pressure
+from ._objectives import (
+    RatioObjective,
+    SingleObjective,
+    WeightedObjective,
+    correlation_error,
+    cost,
+    ratio_objective,
+    single_objective,
+    weighted_objective,
+)
+from ._space import GriddedSpace
+from ._surrogate import (
+    PAPER_PRESSURE_MBAR,
+    PAPER_X1D,
+    PAPER_X1H,
+    analytic_surrogate_space,
+    surrogate_deflection,
+)
+from ._window_focusing import (
+    IdentificationError,
+    IterationState,
+    RepeatedIdentification,
+    WindowFocusingResult,
+    identify_repeated,
+    samples_for,
+    window_focusing,
+)
+
+__all__ = [
+    "GriddedSpace",
+    "LagrangeAxis",
+    "SpaceInterpolant",
+    "interpolate_pressure",
+    "evaluate",
+    "cost",
+    "correlation_error",
+    "SingleObjective",
+    "WeightedObjective",
+    "RatioObjective",
+    "single_objective",
+    "weighted_objective",
+    "ratio_objective",
+    "window_focusing",
+    "identify_repeated",
+    "samples_for",
+    "IdentificationError",
+    "IterationState",
+    "WindowFocusingResult",
+    "RepeatedIdentification",
+    "BaselineResult",
+    "least_squares_from_random_starts",
+    "differential_evolution_fit",
+    "PAPER_X1D",
+    "PAPER_X1H",
+    "PAPER_PRESSURE_MBAR",
+    "surrogate_deflection",
+    "analytic_surrogate_space",
+]

@@ -1,0 +1,261 @@
+"""Omega_s off the grid: piecewise cubic Lagrange interpolation, vectorised.
+
+The paper (section 2.3) computes non-simulated values "with Lagrange's cubic
+interpolation" of the simulated space.  Here every axis uses the local cubic
+Lagrange polynomial through the 4 grid nodes around the point: the two nodes of
+the cell that holds the point and one more on each side (shifted inwards at the
+ends of the axis).  In (X1d, X1h) this is the tensor product, a 4 x 4 stencil.
+Properties that follow and that the tests check:
+
+* the interpolant is exact at grid nodes;
+* it reproduces any polynomial of degree <= 3 in each variable exactly;
+* it is local, so a non-converged (NaN) node only spoils the values whose
+  stencil contains it.
+
+NaN policy.  A value whose stencil holds a NaN node (with a non-zero weight) is
+NaN, and the objectives turn a NaN curve into cost = +inf, so the window focusing
+never selects such a candidate.  Points outside the grid are NaN too (no
+extrapolation).  A pressure that coincides with a grid node takes the node
+value, even if a neighbour node is NaN.
+
+Speed.  The measured pressures are fixed during an identification, so the space
+is first interpolated in p once (:func:`interpolate_pressure`); every iteration
+then only evaluates the 2-D (X1d, X1h) interpolant.  :class:`SpaceInterpolant`
+precomputes the 4 x 4 x u stencil values of every stencil position; a call
+computes the 16 tensor-product weights of all N candidates at once, groups the
+candidates by stencil position and does one small matrix product per group.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._space import GriddedSpace
+
+__all__ = ["LagrangeAxis", "SpaceInterpolant", "interpolate_pressure", "evaluate"]
+
+
+def _numerators(d: np.ndarray) -> np.ndarray:
+    """Lagrange numerators ``prod_{j != k} d_j`` for each k, rows of ``d`` (N, m)."""
+    m = d.shape[1]
+    if m == 4:  # by pairs: 8 products instead of 12
+        d0, d1, d2, d3 = d.T
+        p01, p23 = d0 * d1, d2 * d3
+        return np.stack([d1 * p23, d0 * p23, p01 * d3, p01 * d2], axis=1)
+    return np.stack([np.prod(np.delete(d, k, axis=1), axis=1) for k in range(m)], axis=1)
+
+
+class LagrangeAxis:
+    """Local cubic Lagrange weights on one grid axis.
+
+    Parameters
+    ----------
+    nodes : array_like, shape (n,)
+        Strictly increasing grid nodes.  With fewer than 4 nodes the stencil has
+        ``n`` nodes (linear for 2, quadratic for 3).
+
+    Examples
+    --------
+    >>> ax = LagrangeAxis([0.0, 1.0, 2.0, 3.0, 4.0])
+    >>> start, w = ax.weights([1.0, 2.5])
+    >>> start.tolist()
+    [0, 1]
+    >>> (w.round(4) + 0.0).tolist()
+    [[0.0, 1.0, 0.0, 0.0], [-0.0625, 0.5625, 0.5625, -0.0625]]
+    """
+
+    def __init__(self, nodes):
+        nodes = np.asarray(nodes, dtype=float)
+        if nodes.ndim != 1 or nodes.size < 2 or not np.all(np.diff(nodes) > 0):
+            raise ValueError("nodes must be 1-D, strictly increasing, with >= 2 values")
+        self.nodes = nodes
+        self.m = min(4, nodes.size)
+        self.n_starts = nodes.size - self.m + 1
+        offsets = np.arange(self.m)
+        self._offsets = offsets
+        stencils = nodes[np.arange(self.n_starts)[:, None] + offsets]  # (n_starts, m)
+        # denominators: the numerator formula at x = node k (same rounding, so
+        # the weights are exactly 1 and 0 at the nodes)
+        denom = np.empty((self.n_starts, self.m))
+        for k in range(self.m):
+            denom[:, k] = _numerators(stencils[:, k : k + 1] - stencils)[:, k]
+        # one gather per call: stencil nodes and denominators side by side
+        self._table = np.concatenate([stencils, denom], axis=1)  # (n_starts, 2m)
+        # searchsorted(side="right") r in 0..n  ->  stencil start
+        # (cell r - 1, stencil from cell - 1, shifted inwards at the ends)
+        r = np.arange(nodes.size + 1)
+        self._start_of = np.clip(r - 1 - (self.m // 2 - 1), 0, self.n_starts - 1)
+
+    def weights(self, x):
+        """Stencil start index and Lagrange weights for the points ``x``.
+
+        Returns
+        -------
+        start : ndarray of int, shape (N,)
+            Index of the first stencil node; the stencil is ``start + arange(m)``.
+        weights : ndarray, shape (N, m)
+            Weights of the stencil nodes; NaN rows for points outside the nodes.
+        """
+        x = np.asarray(x, dtype=float).reshape(-1)
+        m = self.m
+        r = np.searchsorted(self.nodes, x, side="right")
+        start = self._start_of[r]
+        table = self._table[start]  # (N, 2m)
+        w = _numerators(x[:, None] - table[:, :m])
+        w /= table[:, m:]
+        outside = (r == 0) | ~(x <= self.nodes[-1])  # NaN is outside too
+        if outside.any():
+            w[outside] = np.nan
+        return start, w
+
+
+def interpolate_pressure(space: GriddedSpace, pressure_mbar) -> GriddedSpace:
+    """The simulated space at other pressures: cubic Lagrange along p, once.
+
+    Parameters
+    ----------
+    space : GriddedSpace
+    pressure_mbar : array_like, shape (u,)
+        Strictly increasing pressures inside the simulated range, e.g. those of a
+        measured curve.
+
+    Returns
+    -------
+    GriddedSpace
+        Same (X1d, X1h) grid, deflections at ``pressure_mbar``.  A value is NaN
+        if a node of its stencil (with non-zero weight) is NaN.
+
+    Raises
+    ------
+    ValueError
+        If a pressure lies outside the simulated pressure range.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> p = np.arange(0.0, 101.0, 2.0)
+    >>> s = GriddedSpace([1.0, 2.0], [1.0, 2.0], p, np.broadcast_to(p**3, (2, 2, 51)), 6)
+    >>> float(interpolate_pressure(s, [3.0]).deflection_mm[0, 0, 0])  # 3**3 exactly
+    27.0
+    """
+    p = np.asarray(pressure_mbar, dtype=float).reshape(-1)
+    lo, hi = space.pressure_mbar[0], space.pressure_mbar[-1]
+    bad = ~((p >= lo) & (p <= hi))
+    if bad.any():
+        raise ValueError(
+            f"pressure {p[bad][0]!r} mbar is outside the simulated range "
+            f"{lo:g}..{hi:g} mbar of the {space.probe_mm:g} mm space"
+        )
+    axis = LagrangeAxis(space.pressure_mbar)
+    start, w = axis.weights(p)
+    idx = start[:, None] + axis._offsets  # (u, m)
+    nodes = space.deflection_mm[..., idx]  # (n1, n2, u, m)
+    terms = np.where(w == 0.0, 0.0, w * nodes)  # a zero weight ignores a NaN node
+    values = terms.sum(axis=-1)
+    return GriddedSpace(space.x1d, space.x1h, p, values, space.probe_mm)
+
+
+class SpaceInterpolant:
+    """Omega_s(X1d, X1h) at fixed pressures, for many candidates at once.
+
+    Parameters
+    ----------
+    space : GriddedSpace
+        The space, already at the pressures wanted (see
+        :func:`interpolate_pressure`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> x1d, x1h, p = np.linspace(0, 1, 5), np.linspace(0, 2, 6), np.array([1.0, 2.0])
+    >>> m = (x1d[:, None, None] ** 3 * x1h[None, :, None] ** 2) * p  # cubic x quadratic
+    >>> om = SpaceInterpolant(GriddedSpace(x1d, x1h, p, m, 6))
+    >>> x = np.array([[0.3, 1.1], [0.7, 0.05]])
+    >>> exact = (x[:, :1] ** 3 * x[:, 1:] ** 2) * p
+    >>> bool(np.allclose(om(x), exact, rtol=1e-12, atol=1e-15))
+    True
+    """
+
+    def __init__(self, space: GriddedSpace):
+        self.space = space
+        self.axis_d = LagrangeAxis(space.x1d)
+        self.axis_h = LagrangeAxis(space.x1h)
+        md, mh = self.axis_d.m, self.axis_h.m
+        u = space.pressure_mbar.size
+        win = np.lib.stride_tricks.sliding_window_view(
+            space.deflection_mm, (md, mh), axis=(0, 1)
+        )  # (nsd, nsh, u, md, mh)
+        stencils = np.moveaxis(win, 2, -1)  # (nsd, nsh, md, mh, u)
+        self._stencils = np.ascontiguousarray(
+            stencils.reshape(self.axis_d.n_starts * self.axis_h.n_starts, md * mh, u)
+        )
+        self.n_points = u
+        self._n_stencils = self._stencils.shape[0]
+        self._work = np.empty((0, u))
+
+    @property
+    def lower(self) -> np.ndarray:
+        return self.space.lower
+
+    @property
+    def upper(self) -> np.ndarray:
+        return self.space.upper
+
+    def __call__(self, candidates, out=None) -> np.ndarray:
+        """Interpolated curves, shape (N, u), for candidates (N, 2) = (X1d, X1h).
+
+        ``out`` (N, u), optional, receives the result (saves allocating a large
+        array per call).  Not thread-safe: one interpolant per thread.
+        """
+        x = np.asarray(candidates, dtype=float)
+        if x.ndim != 2 or x.shape[1] != 2:
+            raise ValueError(f"candidates must have shape (N, 2), got {x.shape}")
+        n = x.shape[0]
+        if out is None:
+            out = np.empty((n, self.n_points))
+        if n == 0:
+            return out
+        sd, wd = self.axis_d.weights(x[:, 0])
+        sh, wh = self.axis_h.weights(x[:, 1])
+        basis = (wd[:, :, None] * wh[:, None, :]).reshape(n, -1)  # (N, 16)
+        key = sd * self.axis_h.n_starts + sh
+        if self._n_stencils < 2**15:
+            key = key.astype(np.int16)  # radix sort below
+        first = key[0]
+        if np.all(key == first):  # one stencil position: one product
+            np.matmul(basis, self._stencils[first], out=out)
+            return out
+        # group the candidates by stencil position, one product per group
+        order = np.argsort(key, kind="stable")
+        sorted_key = key[order]
+        sorted_basis = basis[order]
+        cuts = np.flatnonzero(sorted_key[1:] != sorted_key[:-1]) + 1
+        edges = np.concatenate(([0], cuts, [n]))
+        scratch = self._scratch(n)
+        for a, b in zip(edges[:-1].tolist(), edges[1:].tolist()):
+            np.matmul(sorted_basis[a:b], self._stencils[sorted_key[a]], out=scratch[a:b])
+        out[order] = scratch
+        return out
+
+    def _scratch(self, n: int) -> np.ndarray:
+        if self._work.shape[0] < n:
+            self._work = np.empty((n, self.n_points))
+        return self._work[:n]
+
+
+def evaluate(space: GriddedSpace, candidates, pressure_mbar=None) -> np.ndarray:
+    """Omega_s for candidates (N, 2) at ``pressure_mbar`` (default: the space's), (N, u).
+
+    Convenience for one-off use; an identification builds the
+    :class:`SpaceInterpolant` once instead.
+
+    Examples
+    --------
+    >>> from skinsuction.identify import analytic_surrogate_space
+    >>> s = analytic_surrogate_space(6.0)
+    >>> evaluate(s, [[0.0055, 0.00041]], [50.0, 100.0]).shape
+    (1, 2)
+    """
+    if pressure_mbar is not None:
+        space = interpolate_pressure(space, pressure_mbar)
+    return SpaceInterpolant(space)(candidates)

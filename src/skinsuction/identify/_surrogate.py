@@ -1,0 +1,69 @@
+"""A smooth analytic stand-in for the FE simulated space (tests, examples, benchmarks).
+
+Not a skin model: it only mimics the features of the FE curves that matter to
+the identification -- deflections of the right size (about 1 mm at 100 mbar),
+stiffening with pressure, and a hypodermis that matters much more under the
+6 mm aperture than under the 2 mm one (paper, Figure 3).
+
+    M(p) = 0.5 a (p / k) / sqrt(1 + p / X1d),   k = X1d + (a / 1 mm)^2 X1h,
+
+with a = probe_mm / 2 (mm) and p in MPa (1 mbar = 1e-4 MPa).  The initial
+compliance sees both layers; the stiffening sees the dermis only, so the 6 mm
+curve determines both moduli.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._space import GriddedSpace
+
+__all__ = [
+    "PAPER_X1D",
+    "PAPER_X1H",
+    "PAPER_PRESSURE_MBAR",
+    "surrogate_deflection",
+    "analytic_surrogate_space",
+]
+
+#: Dermis moduli of the paper's simulated space (eq. 3), MPa: 0.001, 0.010, ..., 0.091.
+PAPER_X1D = 0.001 + 0.009 * np.arange(11)
+#: Hypodermis moduli of the paper's simulated space (eq. 3), MPa: 1e-5, 2.1e-4, ..., 2.01e-3.
+PAPER_X1H = 1e-5 + 2e-4 * np.arange(11)
+#: Pressures of the paper's simulated space (eq. 3), mbar: 0, 2, ..., 100.
+PAPER_PRESSURE_MBAR = np.arange(0.0, 101.0, 2.0)
+
+
+def surrogate_deflection(x1d, x1h, pressure_mbar, probe_mm: float) -> np.ndarray:
+    """Analytic deflection (mm) with shape ``broadcast(x1d, x1h).shape + (n_p,)``.
+
+    Examples
+    --------
+    >>> round(float(surrogate_deflection(0.0055, 0.00041, [100.0], 6.0)[0]), 4)
+    0.9723
+    """
+    a = 0.5 * float(probe_mm)
+    p = 1e-4 * np.asarray(pressure_mbar, dtype=float)
+    x1d = np.asarray(x1d, dtype=float)[..., None]
+    x1h = np.asarray(x1h, dtype=float)[..., None]
+    k = x1d + a**2 * x1h
+    return 0.5 * a * (p / k) / np.sqrt(1.0 + p / x1d)
+
+
+def analytic_surrogate_space(
+    probe_mm: float,
+    x1d=PAPER_X1D,
+    x1h=PAPER_X1H,
+    pressure_mbar=PAPER_PRESSURE_MBAR,
+) -> GriddedSpace:
+    """The surrogate tabulated on a grid (default: the paper's 11 x 11 x 51 grid).
+
+    Examples
+    --------
+    >>> analytic_surrogate_space(2.0).shape
+    (11, 11, 51)
+    """
+    x1d = np.asarray(x1d, dtype=float)
+    x1h = np.asarray(x1h, dtype=float)
+    m = surrogate_deflection(x1d[:, None], x1h[None, :], pressure_mbar, probe_mm)
+    return GriddedSpace(x1d, x1h, pressure_mbar, m, probe_mm)

@@ -1,0 +1,325 @@
+"""The window focusing stochastic algorithm (paper section 2.4, eqs. 5-8).
+
+1. The window starts at the bounds of the simulated space.
+2. Iteration j draws N candidates uniformly in the window (eq. 5).
+3. The cost of all candidates is evaluated (one vectorised call) and sorted.
+4. The new window is the min/max of the Nb best candidates (eq. 6).
+
+The iterations stop when ``|E_{j-1} - E_j| < C`` where ``E_j`` is the
+correlation error (eq. 7) of the best candidate of iteration j; the estimate is
+that best candidate of the last iteration.  (There is no E_0, so at least two
+iterations run.)  Candidates with cost +inf (non-converged parts of the space)
+are never among the Nb best unless fewer than Nb candidates are finite, in which
+case only the finite ones define the window; if none is finite the
+identification fails with :class:`IdentificationError`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+__all__ = [
+    "IdentificationError",
+    "IterationState",
+    "WindowFocusingResult",
+    "RepeatedIdentification",
+    "window_focusing",
+    "identify_repeated",
+    "samples_for",
+]
+
+
+class IdentificationError(RuntimeError):
+    """The window focusing cannot go on (e.g. every candidate has cost +inf)."""
+
+
+def _n_smallest(costs: np.ndarray, k: int) -> np.ndarray:
+    """Indices of the k smallest costs, sorted by increasing cost."""
+    if k < costs.size:
+        part = np.argpartition(costs, k - 1)[:k]
+    else:
+        part = np.arange(costs.size)
+    return part[np.argsort(costs[part], kind="stable")]
+
+
+def samples_for(rho: float, e: float) -> int:
+    """Eq. 8: number of samples N = ln(1 - rho) / ln(1 - e), rounded up.
+
+    N uniform samples reach the global minimum with accuracy ``e`` (fraction of
+    the window) with probability ``rho``.
+
+    Examples
+    --------
+    >>> samples_for(0.99, 0.01)
+    459
+    >>> samples_for(0.999, 0.01)
+    688
+    """
+    rho, e = float(rho), float(e)
+    if not (0.0 < rho < 1.0 and 0.0 < e < 1.0):
+        raise ValueError(f"rho and e must lie in (0, 1), got rho={rho}, e={e}")
+    return int(math.ceil(math.log1p(-rho) / math.log1p(-e)))
+
+
+@dataclass(frozen=True)
+class IterationState:
+    """What one iteration saw; passed to the ``callback`` of :func:`window_focusing`."""
+
+    iteration: int
+    lower: np.ndarray
+    upper: np.ndarray
+    samples: np.ndarray  # (N, 2)
+    costs: np.ndarray  # (N,)
+    best: np.ndarray  # indices of the Nb best samples, best first
+    E: float
+
+
+@dataclass(frozen=True)
+class WindowFocusingResult:
+    """Outcome of one window focusing identification.
+
+    Attributes
+    ----------
+    estimate : ndarray (2,)
+        (X1d, X1h) in MPa, the best candidate of the last iteration.
+    E, E_unit : float, str
+        Correlation error (eq. 7) of the estimate and its unit ("µm", or "1"
+        for the dimensionless ratio objective).
+    cost : float
+        Cost (eq. 4, 10 or 11-12) of the estimate.
+    iterations : int
+    windows : list of (lower, upper)
+        ``windows[0]`` is the initial window (space bounds); ``windows[j]`` the
+        window computed by eq. 6 at iteration j.
+    E_history : ndarray (iterations,)
+        E of the best candidate of each iteration.
+    n_evaluations : int
+        Number of candidates evaluated (N x iterations).
+    converged : bool
+        False if ``max_iter`` was hit before ``|E_{j-1} - E_j| < C``.
+    seconds : float
+    """
+
+    estimate: np.ndarray
+    E: float
+    E_unit: str
+    cost: float
+    iterations: int
+    windows: list = field(repr=False)
+    E_history: np.ndarray = field(repr=False)
+    n_evaluations: int = 0
+    converged: bool = False
+    seconds: float = 0.0
+
+    @property
+    def x1d(self) -> float:
+        return float(self.estimate[0])
+
+    @property
+    def x1h(self) -> float:
+        return float(self.estimate[1])
+
+    @property
+    def E_um(self) -> float:
+        """E in µm (NaN for a dimensionless objective)."""
+        return float(self.E) if self.E_unit == "µm" else math.nan
+
+
+def _bounds(objective, bounds):
+    if bounds is None:
+        lower, upper = objective.lower, objective.upper
+    else:
+        lower, upper = bounds
+    lower = np.array(lower, dtype=float).reshape(2)
+    upper = np.array(upper, dtype=float).reshape(2)
+    if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper)) and np.all(lower <= upper)):
+        raise ValueError(f"invalid window bounds lower={lower}, upper={upper}")
+    return lower, upper
+
+
+def window_focusing(
+    objective,
+    *,
+    seed,
+    bounds=None,
+    n_samples: int = 1000,
+    n_best: int = 20,
+    tolerance: float = 1e-6,
+    max_iter: int = 200,
+    callback: Callable[[IterationState], None] | None = None,
+) -> WindowFocusingResult:
+    """Identify (X1d, X1h) by window focusing (paper section 2.4).
+
+    Parameters
+    ----------
+    objective : callable
+        ``objective(candidates (N, 2)) -> cost (N,)`` with attributes ``lower``,
+        ``upper``, ``error(cost)`` and ``error_unit`` (see ``_objectives``).
+    seed : int, numpy.random.SeedSequence or numpy.random.Generator
+        Source of the random samples; required, so every run is reproducible.
+    bounds : (lower, upper), optional
+        Initial window; default the bounds of the simulated space.
+    n_samples : int
+        N, candidates per iteration (paper: 1000; see :func:`samples_for`).
+    n_best : int
+        Nb, candidates that define the next window (paper: 20).
+    tolerance : float
+        C, stop when ``|E_{j-1} - E_j| < C``, in the unit of E (paper: 1e-6 µm).
+    max_iter : int
+        Guard; the result has ``converged=False`` if it is reached.
+    callback : callable, optional
+        Called with an :class:`IterationState` after each iteration.
+
+    Returns
+    -------
+    WindowFocusingResult
+
+    Examples
+    --------
+    >>> from skinsuction.identify import (analytic_surrogate_space, evaluate,
+    ...                                   single_objective)
+    >>> s6 = analytic_surrogate_space(6.0)
+    >>> curve = (s6.pressure_mbar, evaluate(s6, [[0.0055, 0.00041]])[0])
+    >>> r = window_focusing(single_objective(s6, curve), seed=1)
+    >>> r.converged, r.estimate.round(6).tolist()
+    (True, [0.0055, 0.00041])
+    """
+    n_samples, n_best, max_iter = int(n_samples), int(n_best), int(max_iter)
+    if not 1 <= n_best <= n_samples:
+        raise ValueError(f"need 1 <= n_best <= n_samples, got {n_best} and {n_samples}")
+    if max_iter < 1 or not tolerance >= 0:
+        raise ValueError("max_iter must be >= 1 and tolerance >= 0")
+    t0 = time.perf_counter()
+    rng = np.random.default_rng(seed)
+    lower, upper = _bounds(objective, bounds)
+    windows = [(lower, upper)]
+    e_history = []
+    converged = False
+    for j in range(1, max_iter + 1):
+        samples = lower + (upper - lower) * rng.random((n_samples, 2))  # eq. 5
+        costs = np.asarray(objective(samples), dtype=float)
+        best = _n_smallest(costs, n_best)
+        best = best[np.isfinite(costs[best])]
+        if best.size == 0:
+            raise IdentificationError(
+                f"iteration {j}: all {n_samples} candidates in the window "
+                f"{lower.tolist()}..{upper.tolist()} have an infinite cost "
+                "(non-converged part of the simulated space?)"
+            )
+        x_best, j_best = samples[best[0]], float(costs[best[0]])
+        e_j = float(objective.error(j_best))
+        e_history.append(e_j)
+        lower, upper = samples[best].min(axis=0), samples[best].max(axis=0)  # eq. 6
+        windows.append((lower, upper))
+        if callback is not None:
+            callback(IterationState(j, *windows[-2], samples, costs, best, e_j))
+        if j > 1 and abs(e_history[-2] - e_j) < tolerance:
+            converged = True
+            break
+    return WindowFocusingResult(
+        estimate=x_best.copy(),
+        E=e_j,
+        E_unit=objective.error_unit,
+        cost=j_best,
+        iterations=j,
+        windows=windows,
+        E_history=np.array(e_history),
+        n_evaluations=j * n_samples,
+        converged=converged,
+        seconds=time.perf_counter() - t0,
+    )
+
+
+@dataclass(frozen=True)
+class RepeatedIdentification:
+    """Many independent window focusing runs on one objective (paper: 100).
+
+    Attributes
+    ----------
+    estimates : ndarray (R, 2)
+    E : ndarray (R,)
+    iterations : ndarray (R,)
+    converged : ndarray of bool (R,)
+    results : list of WindowFocusingResult
+    """
+
+    estimates: np.ndarray
+    E: np.ndarray
+    iterations: np.ndarray
+    converged: np.ndarray
+    results: list = field(repr=False)
+
+    @property
+    def mean(self) -> np.ndarray:
+        return self.estimates.mean(axis=0)
+
+    @property
+    def std(self) -> np.ndarray:
+        """Sample standard deviation (ddof=1; 0 for one repeat)."""
+        if len(self.estimates) < 2:
+            return np.zeros(2)
+        return self.estimates.std(axis=0, ddof=1)
+
+    @property
+    def relative_spread(self) -> np.ndarray:
+        """std / |mean| for (X1d, X1h)."""
+        return self.std / np.abs(self.mean)
+
+    def relative_error(self, truth) -> np.ndarray:
+        """(R, 2) relative errors of the estimates with respect to ``truth``."""
+        truth = np.asarray(truth, dtype=float)
+        return (self.estimates - truth) / truth
+
+    def summary(self) -> dict:
+        """Plain numbers for tables and JSON."""
+        return {
+            "repeats": int(len(self.estimates)),
+            "x1d_mean": float(self.mean[0]),
+            "x1h_mean": float(self.mean[1]),
+            "x1d_std": float(self.std[0]),
+            "x1h_std": float(self.std[1]),
+            "x1d_min": float(self.estimates[:, 0].min()),
+            "x1d_max": float(self.estimates[:, 0].max()),
+            "x1h_min": float(self.estimates[:, 1].min()),
+            "x1h_max": float(self.estimates[:, 1].max()),
+            "E_mean": float(self.E.mean()),
+            "iterations_mean": float(self.iterations.mean()),
+            "converged_fraction": float(self.converged.mean()),
+        }
+
+
+def identify_repeated(objective, repeats: int = 100, seed=0, **options) -> RepeatedIdentification:
+    """Run :func:`window_focusing` ``repeats`` times with independent seeds.
+
+    The seeds are ``numpy.random.SeedSequence(seed).spawn(repeats)``, so the
+    whole set is reproducible from ``seed``.  ``options`` go to
+    :func:`window_focusing` (``bounds``, ``n_samples``, ``n_best``, ...).
+
+    Examples
+    --------
+    >>> from skinsuction.identify import (analytic_surrogate_space, evaluate,
+    ...                                   single_objective)
+    >>> s6 = analytic_surrogate_space(6.0)
+    >>> curve = (s6.pressure_mbar, evaluate(s6, [[0.0055, 0.00041]])[0])
+    >>> rep = identify_repeated(single_objective(s6, curve), repeats=5, seed=0)
+    >>> rep.estimates.shape, bool(rep.converged.all())
+    ((5, 2), True)
+    """
+    repeats = int(repeats)
+    if repeats < 1:
+        raise ValueError("repeats must be >= 1")
+    root = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+    seeds = root.spawn(repeats)
+    results = [window_focusing(objective, seed=s, **options) for s in seeds]
+    return RepeatedIdentification(
+        estimates=np.array([r.estimate for r in results]),
+        E=np.array([r.E for r in results]),
+        iterations=np.array([r.iterations for r in results]),
+        converged=np.array([r.converged for r in results]),
+        results=results,
+    )
