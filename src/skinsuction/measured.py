@@ -1,0 +1,468 @@
+"""Load and check measured suction curves M(p) (CSV files).
+
+File format
+-----------
+UTF-8 text (a byte-order mark is allowed), comma-separated, one header line::
+
+    # subject: S01
+    # site: forearm
+    probe_mm,pressure_mbar,deflection_mm,curve
+    6,0,0.000,A
+    6,2,0.031,A
+    ...
+
+* Columns ``probe_mm`` (aperture diameter, mm), ``pressure_mbar`` (suction,
+  positive, mbar) and ``deflection_mm`` (apex deflection into the aperture, mm)
+  are required; ``curve`` (replicate id, any text) is optional.  No other column
+  is allowed; the order of the columns is free.
+* Lines starting with ``#`` are comments, kept in ``MeasuredData.comments``;
+  ``# key: value`` comments also go to ``MeasuredData.metadata`` (a later key
+  overrides an earlier one).  Blank lines are ignored.
+* One file may hold several probes and several curves per probe.  A curve is
+  the set of rows with the same (``probe_mm``, ``curve``); without a ``curve``
+  column every probe has exactly one curve.  Within a curve the pressures must
+  strictly increase down the file.
+
+Every rejection raises :class:`MeasuredDataError` (a ``ValueError``) with a
+one-line message naming the file, the line (1-based, counting every line of the
+file) and, where it applies, the column.  The checks, in this order:
+
+1. the file can be read and is UTF-8;
+2. header: comma-separated, no missing, unknown or repeated column;
+3. every row: as many fields as the header; numbers in plain decimal notation
+   (``1``, ``-0.5``, ``2e-3``), finite; ``probe_mm > 0``; ``curve`` not empty;
+4. every curve: at least 2 points, pressures strictly increasing (a drop
+   suggests two curves without a ``curve`` column), then the unit rules below;
+5. against the simulated space, if given: the probe diameter is one of
+   ``available_probes`` (to 1e-6 mm); the pressures lie in
+   ``pressure_range_mbar`` (to 1e-9 mbar).
+
+Unit rules (a Cutometer applies at most about 500 mbar, and the dome of the
+skin rises by millimetres, at most a few):
+
+* pressures below zero: suction must be given as positive mbar;
+* largest pressure above 1000 "mbar": looks like Pa (1 mbar = 100 Pa);
+* largest pressure above 0 but at most 1 "mbar": looks like bar or kPa
+  (100 mbar = 0.1 bar = 10 kPa).  A kPa curve that goes beyond 1 kPa cannot be
+  told from a low-pressure mbar curve and is not detected;
+* no pressure above 0: a curve needs suction;
+* largest |deflection| above 20 "mm": looks like µm (1 mm = 1000 µm);
+* largest |deflection| above 0 but below 0.001 "mm": looks like metres;
+* deflections all <= 0 with some < 0: wrong sign (positive into the aperture).
+
+Examples
+--------
+>>> import pathlib, tempfile
+>>> path = pathlib.Path(tempfile.mkdtemp()) / "s01.csv"
+>>> _ = path.write_text("# subject: S01\\nprobe_mm,pressure_mbar,deflection_mm\\n"
+...                     "6,0,0\\n6,50,0.4\\n6,100,0.7\\n", encoding="utf-8")
+>>> data = load_measured(path, available_probes=[2, 6], pressure_range_mbar=(0, 100))
+>>> data.metadata["subject"], data.probes
+('S01', (6.0,))
+>>> data.curve(6).deflection_mm.tolist()
+[0.0, 0.4, 0.7]
+>>> _ = path.write_text("probe_mm,pressure_mbar,deflection_mm\\n6,0,0\\n6,5000,400\\n")
+>>> load_measured(path)  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+skinsuction.measured.MeasuredDataError: ...s01.csv, line 3, column 'pressure_mbar': largest pressure 5000 mbar looks like Pa, not mbar (1 mbar = 100 Pa; a Cutometer applies at most about 500 mbar)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "MeasuredDataError",
+    "MeasuredCurve",
+    "MeasuredData",
+    "load_measured",
+    "REQUIRED_COLUMNS",
+    "OPTIONAL_COLUMNS",
+]
+
+REQUIRED_COLUMNS = ("probe_mm", "pressure_mbar", "deflection_mm")
+OPTIONAL_COLUMNS = ("curve",)
+
+#: Largest pressure (mbar) above which a curve "looks like Pa".
+PA_ABOVE_MBAR = 1000.0
+#: Largest pressure (mbar) at or below which a curve "looks like bar or kPa".
+BAR_AT_MOST_MBAR = 1.0
+#: Largest |deflection| (mm) above which a curve "looks like µm".
+UM_ABOVE_MM = 20.0
+#: Largest |deflection| (mm) below which a curve "looks like metres".
+M_BELOW_MM = 1e-3
+
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
+_UNIT_HINTS = {
+    "pressure_pa": "pressures must be in mbar: name the column pressure_mbar and divide Pa by 100",
+    "pressure_kpa": "pressures must be in mbar: name the column pressure_mbar and multiply kPa by 10",
+    "pressure_bar": "pressures must be in mbar: name the column pressure_mbar and multiply bar by 1000",
+    "deflection_um": "deflections must be in mm: name the column deflection_mm and divide µm by 1000",
+    "deflection_µm": "deflections must be in mm: name the column deflection_mm and divide µm by 1000",
+    "deflection_m": "deflections must be in mm: name the column deflection_mm and multiply m by 1000",
+    "probe_cm": "the probe diameter must be in mm: name the column probe_mm",
+}
+
+
+class MeasuredDataError(ValueError):
+    """A measured-curve file was rejected; the message is one line.
+
+    Attributes
+    ----------
+    path : str
+    line : int or None
+        1-based line of the file.
+    column : str or None
+    reason : str
+    """
+
+    def __init__(self, path, line: int | None, column: str | None, reason: str):
+        self.path = str(path)
+        self.line = line
+        self.column = column
+        self.reason = " ".join(str(reason).split())  # one line, whatever the input
+        where = self.path
+        if line is not None:
+            where += f", line {line}"
+        if column is not None:
+            where += f", column {_show(column)}"
+        super().__init__(f"{where}: {self.reason}")
+
+
+@dataclass(frozen=True, eq=False)
+class MeasuredCurve:
+    """One measured curve M(p).
+
+    Attributes
+    ----------
+    probe_mm : float
+    pressure_mbar, deflection_mm : ndarray
+        Strictly increasing pressures and the deflections measured at them.
+    curve : str
+        Replicate id ('' when the file has no ``curve`` column).
+    first_line : int
+        Line of the file where the curve starts.
+    """
+
+    probe_mm: float
+    pressure_mbar: np.ndarray
+    deflection_mm: np.ndarray
+    curve: str = ""
+    first_line: int = 0
+
+    def __len__(self) -> int:
+        return int(self.pressure_mbar.size)
+
+
+@dataclass(frozen=True, eq=False)
+class MeasuredData:
+    """Every curve of one file, with its comments.
+
+    Attributes
+    ----------
+    path : str
+    curves : tuple of MeasuredCurve
+        In the order of their first row in the file.
+    metadata : dict
+        ``key: value`` comments.
+    comments : tuple of str
+        Every comment line, without the leading ``#`` and surrounding blanks.
+    """
+
+    path: str
+    curves: tuple
+    metadata: dict = field(default_factory=dict)
+    comments: tuple = ()
+
+    @property
+    def probes(self) -> tuple:
+        """Probe diameters present in the file, ascending."""
+        return tuple(sorted({c.probe_mm for c in self.curves}))
+
+    def for_probe(self, probe_mm: float) -> tuple:
+        """All curves (replicates) of one probe."""
+        return tuple(c for c in self.curves if math.isclose(c.probe_mm, probe_mm, abs_tol=1e-6))
+
+    def curve(self, probe_mm: float, curve: str | None = None) -> MeasuredCurve:
+        """The single curve of a probe, or the replicate named ``curve``.
+
+        Raises
+        ------
+        KeyError
+            If there is no such curve, or several and ``curve`` is None.
+        """
+        found = self.for_probe(probe_mm)
+        if curve is not None:
+            found = tuple(c for c in found if c.curve == str(curve))
+        if len(found) != 1:
+            ids = [c.curve for c in self.for_probe(probe_mm)]
+            raise KeyError(
+                f"{self.path}: {len(found)} curves match probe {probe_mm:g} mm"
+                f"{'' if curve is None else f', curve {curve!r}'} (curves of this probe: {ids})"
+            )
+        return found[0]
+
+
+def _show(value, limit: int = 40) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _read_text(path) -> str:
+    try:
+        with open(path, "rb") as f:
+            raw = f.read()
+    except OSError as e:
+        raise MeasuredDataError(path, None, None, f"cannot read the file ({e.strerror or e})") from None
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = raw[: e.start].count(b"\n") + 1
+        raise MeasuredDataError(
+            path, line, None, f"not UTF-8 text (byte 0x{raw[e.start]:02x}); save the file as UTF-8"
+        ) from None
+
+
+def _split(line: str) -> list[str]:
+    return [f.strip().strip('"').strip() for f in line.split(",")]
+
+
+def _header(path, lineno: int, text: str) -> list[str]:
+    names = _split(text)
+    if len(names) == 1:
+        for sep, label in ((";", "';'"), ("\t", "tabs")):
+            if sep in text:
+                raise MeasuredDataError(
+                    path, lineno, None,
+                    f"columns must be separated by ',', the header uses {label}",
+                )
+    seen = set()
+    for name in names:
+        if name in seen:
+            raise MeasuredDataError(path, lineno, name, "column appears twice in the header")
+        seen.add(name)
+        if name not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS:
+            hint = _UNIT_HINTS.get(name.lower())
+            if hint is None:
+                hint = (
+                    "unexpected column; the columns are "
+                    + ", ".join(REQUIRED_COLUMNS)
+                    + " and optionally "
+                    + ", ".join(OPTIONAL_COLUMNS)
+                )
+            raise MeasuredDataError(path, lineno, name, hint)
+    for name in REQUIRED_COLUMNS:
+        if name not in seen:
+            raise MeasuredDataError(path, lineno, name, "required column is missing from the header")
+    return names
+
+
+def _number(path, lineno: int, column: str, text: str) -> float:
+    if _NUMBER.fullmatch(text):
+        value = float(text)
+        if math.isfinite(value):
+            return value
+        raise MeasuredDataError(path, lineno, column, f"value {_show(text)} is too large")
+    if _NON_FINITE.fullmatch(text):
+        raise MeasuredDataError(path, lineno, column, f"value {_show(text)} is not finite")
+    if text == "":
+        raise MeasuredDataError(path, lineno, column, "value is empty")
+    raise MeasuredDataError(path, lineno, column, f"value {_show(text)} is not a number")
+
+
+@dataclass
+class _Rows:
+    probe: float
+    curve: str
+    lines: list = field(default_factory=list)
+    pressure: list = field(default_factory=list)
+    deflection: list = field(default_factory=list)
+
+
+def _parse(path, text: str):
+    comments, metadata, header, groups = [], {}, None, {}
+    for lineno, line in enumerate(text.split("\n"), start=1):
+        line = line.rstrip("\r")
+        stripped = line.strip()
+        if not stripped:
+            continue
+        if stripped.startswith("#"):
+            comment = stripped[1:].strip()
+            comments.append(comment)
+            key, sep, value = comment.partition(":")
+            if sep and key.strip():
+                metadata[key.strip()] = value.strip()
+            continue
+        if header is None:
+            header = _header(path, lineno, line)
+            continue
+        fields = _split(line)
+        if len(fields) != len(header):
+            hint = " (a decimal comma? use '.')" if len(fields) > len(header) else ""
+            raise MeasuredDataError(
+                path, lineno, None,
+                f"found {len(fields)} fields, expected {len(header)} ({', '.join(header)}){hint}",
+            )
+        row = dict(zip(header, fields))
+        values = {c: _number(path, lineno, c, row[c]) for c in REQUIRED_COLUMNS}
+        if values["probe_mm"] <= 0:
+            raise MeasuredDataError(
+                path, lineno, "probe_mm", f"probe diameter {values['probe_mm']:g} mm must be positive"
+            )
+        curve = row.get("curve", "")
+        if "curve" in row and curve == "":
+            raise MeasuredDataError(path, lineno, "curve", "curve id is empty")
+        key = (values["probe_mm"], curve)
+        rows = groups.setdefault(key, _Rows(values["probe_mm"], curve))
+        rows.lines.append(lineno)
+        rows.pressure.append(values["pressure_mbar"])
+        rows.deflection.append(values["deflection_mm"])
+    if header is None:
+        n_lines = text.count("\n") + 1
+        raise MeasuredDataError(
+            path, n_lines, None,
+            "no header line (expected " + ",".join(REQUIRED_COLUMNS) + ")",
+        )
+    if not groups:
+        raise MeasuredDataError(path, text.count("\n") + 1, None, "no data rows after the header")
+    return header, groups, comments, metadata
+
+
+def _label(rows: _Rows) -> str:
+    return f"{rows.probe:g} mm curve" + (f" {_show(rows.curve)}" if rows.curve else "")
+
+
+def _check_curve(path, rows: _Rows) -> None:
+    p, d, lines = rows.pressure, rows.deflection, rows.lines
+    if len(p) < 2:
+        raise MeasuredDataError(path, lines[0], None, f"the {_label(rows)} has 1 point, need >= 2")
+    for k in range(1, len(p)):
+        if p[k] == p[k - 1]:
+            raise MeasuredDataError(
+                path, lines[k], "pressure_mbar",
+                f"pressure {p[k]:g} mbar repeats line {lines[k - 1]} of the {_label(rows)}",
+            )
+        if p[k] < p[k - 1]:
+            hint = (
+                "; a new curve? add a 'curve' column with a replicate id"
+                if p[k] <= p[0] else ""
+            )
+            raise MeasuredDataError(
+                path, lines[k], "pressure_mbar",
+                f"pressure {p[k]:g} mbar is lower than {p[k - 1]:g} mbar on line {lines[k - 1]}; "
+                f"pressures must increase within the {_label(rows)}{hint}",
+            )
+    # unit rules
+    k_min = int(np.argmin(p))
+    if p[k_min] < 0:
+        raise MeasuredDataError(
+            path, lines[k_min], "pressure_mbar",
+            f"pressure {p[k_min]:g} mbar is negative; give the suction as positive mbar",
+        )
+    k_max = int(np.argmax(p))
+    p_max = p[k_max]
+    if p_max > PA_ABOVE_MBAR:
+        raise MeasuredDataError(
+            path, lines[k_max], "pressure_mbar",
+            f"largest pressure {p_max:g} mbar looks like Pa, not mbar "
+            "(1 mbar = 100 Pa; a Cutometer applies at most about 500 mbar)",
+        )
+    if p_max <= 0:
+        raise MeasuredDataError(
+            path, lines[k_max], "pressure_mbar", f"the {_label(rows)} has no pressure above 0"
+        )
+    if p_max <= BAR_AT_MOST_MBAR:
+        raise MeasuredDataError(
+            path, lines[k_max], "pressure_mbar",
+            f"largest pressure {p_max:g} mbar looks like bar or kPa, not mbar "
+            "(100 mbar = 0.1 bar = 10 kPa)",
+        )
+    a = np.abs(d)
+    k_big = int(np.argmax(a))
+    if a[k_big] > UM_ABOVE_MM:
+        raise MeasuredDataError(
+            path, lines[k_big], "deflection_mm",
+            f"largest deflection {d[k_big]:g} mm looks like µm, not mm (1 mm = 1000 µm)",
+        )
+    if 0 < a[k_big] < M_BELOW_MM:
+        raise MeasuredDataError(
+            path, lines[k_big], "deflection_mm",
+            f"largest deflection {d[k_big]:g} mm looks like metres, not mm (1 m = 1000 mm)",
+        )
+    if max(d) <= 0 and min(d) < 0:
+        raise MeasuredDataError(
+            path, lines[int(np.argmin(d))], "deflection_mm",
+            f"deflections of the {_label(rows)} are negative; "
+            "give them positive into the aperture",
+        )
+
+
+def _check_space(path, rows: _Rows, available_probes, pressure_range) -> None:
+    if available_probes is not None:
+        probes = [float(q) for q in available_probes]
+        if not any(math.isclose(rows.probe, q, abs_tol=1e-6) for q in probes):
+            listed = ", ".join(f"{q:g}" for q in sorted(probes)) or "none"
+            raise MeasuredDataError(
+                path, rows.lines[0], "probe_mm",
+                f"probe diameter {rows.probe:g} mm is not in the simulated space "
+                f"(available: {listed} mm)",
+            )
+    if pressure_range is not None:
+        lo, hi = (float(v) for v in pressure_range)
+        for line, p in zip(rows.lines, rows.pressure):
+            if p < lo - 1e-9 or p > hi + 1e-9:
+                raise MeasuredDataError(
+                    path, line, "pressure_mbar",
+                    f"pressure {p:g} mbar is outside the simulated range {lo:g}..{hi:g} mbar",
+                )
+
+
+def load_measured(
+    path: str | os.PathLike,
+    *,
+    available_probes=None,
+    pressure_range_mbar=None,
+) -> MeasuredData:
+    """Read and check a measured-curve CSV file (format in the module docstring).
+
+    Parameters
+    ----------
+    path : str or path-like
+    available_probes : iterable of float, optional
+        Probe diameters (mm) held by the simulated space; other probes are rejected.
+    pressure_range_mbar : (float, float), optional
+        Pressure range of the simulated space; pressures outside are rejected.
+
+    Returns
+    -------
+    MeasuredData
+
+    Raises
+    ------
+    MeasuredDataError
+        For any problem of the file, with file, line and column in the message.
+    """
+    text = _read_text(path)
+    _, groups, comments, metadata = _parse(path, text)
+    for rows in groups.values():
+        _check_curve(path, rows)
+    for rows in groups.values():
+        _check_space(path, rows, available_probes, pressure_range_mbar)
+    curves = tuple(
+        MeasuredCurve(
+            probe_mm=rows.probe,
+            pressure_mbar=np.array(rows.pressure),
+            deflection_mm=np.array(rows.deflection),
+            curve=rows.curve,
+            first_line=rows.lines[0],
+        )
+        for rows in groups.values()
+    )
+    return MeasuredData(str(path), curves, metadata, tuple(comments))
