@@ -25,11 +25,23 @@ from skinsuction.space import POINT_ID_PATTERN, expand_axis, grid_points, point_
 
 
 # ---------------------------------------------------------------- configuration
-validate(config, schema="../schemas/config.schema.yaml")
-
-
 def _config_error(key, err):
     return WorkflowError(f"Invalid configuration value for '{key}': {err}")
+
+
+try:
+    validate(config, schema="../schemas/config.schema.yaml")
+except WorkflowError as err:
+    # name the offending key in the first line, e.g. 'mesh.refinement'
+    _cause = err.__cause__ or err.__context__
+    if hasattr(_cause, "absolute_path") and hasattr(_cause, "message"):
+        _key = ".".join(map(str, _cause.absolute_path)) or "<top level>"
+        _msg = _cause.message
+        if _cause.context:  # oneOf: say what the deepest-matching alternative objects to
+            _best = max(_cause.context, key=lambda e: len(e.relative_path))
+            _msg += f" (e.g. {_best.message})"
+        raise _config_error(_key, _msg) from err
+    raise
 
 
 try:

@@ -1,0 +1,171 @@
+"""The study configurations and their schema."""
+
+import copy
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+from snakemake.exceptions import WorkflowError
+from snakemake.utils import validate
+
+from skinsuction.space import expand_axis, grid_points
+
+ROOT = Path(__file__).resolve().parents[1]
+SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
+CONFIGS = {name: ROOT / "config" / f"{name}.yaml" for name in ("config", "ci")}
+
+
+def load(name):
+    return yaml.safe_load(CONFIGS[name].read_text())
+
+
+@pytest.mark.parametrize("name", sorted(CONFIGS))
+def test_configs_validate(name):
+    config = load(name)
+    validate(config, str(SCHEMA))
+    assert config["mesh"]["element"] == "quad8"
+    for spec in config["spaces"].values():
+        assert grid_points(spec)
+    assert expand_axis(config["pressures_mbar"])[0] == 0
+
+
+def test_paper_config_is_the_paper_study():
+    config = load("config")
+    paper = grid_points(config["spaces"]["paper"])
+    assert len(paper) == 2 * 11 * 11
+    assert {p["probe_mm"] for p in paper} == {2.0, 6.0}
+    assert {p["bottom"] for p in paper} == {"fixed"}
+    assert expand_axis(config["pressures_mbar"]) == [float(p) for p in range(0, 101, 2)]
+    fig3 = grid_points(config["figure3"], ignore=("pressure_mbar",))
+    assert len(fig3) == 2 * 3 * 13
+    assert {p["x1d"] for p in fig3} == {0.08}
+    x1h = sorted({p["x1h"] for p in fig3})
+    assert x1h[0] == 1e-5 and x1h[-1] == 0.1
+
+
+def test_ci_config_is_coarse():
+    config = load("ci")
+    n = sum(len(grid_points(s)) for s in config["spaces"].values())
+    assert n <= 2 * 3 * 3
+    assert config["mesh"]["refinement"] <= 0.5
+    assert 3 <= len(expand_axis(config["figure3"]["x1h"])) <= 4
+
+
+def test_defaults_are_filled_in():
+    config = {
+        "spaces": {"s": {"probes_mm": [6], "x1d": 0.01, "x1h": [1e-4]}},
+        "pressures_mbar": {"start": 0, "stop": 100, "step": 2},
+        "figure3": {"probes_mm": [6], "x1d": 0.08, "x1h": {"logspace": [-5, -1, 3]}},
+    }
+    validate(config, str(SCHEMA))
+    assert config["mesh"] == {
+        "refinement": 1.0,
+        "element": "quad8",
+        "edge_radius_mm": 0.0,
+        "outer_radius_factor": 3.0,
+    }
+    assert config["spaces"]["s"]["bottom"] == ["fixed"]
+    assert config["spaces"]["s"]["x2d"] == [0.0] and config["spaces"]["s"]["t_h"] == [1.0]
+    assert config["figure3"]["bottom"] == ["fixed", "axial", "free"]
+
+
+def test_spaces_with_second_order_and_thickness_axes_are_admitted():
+    config = load("config")
+    config["spaces"]["x2"] = {
+        "probes_mm": [6],
+        "x1d": {"start": 0.01, "stop": 0.05, "step": 0.02},
+        "x1h": {"logspace": [-5, -3, 3]},
+        "x2d": [-0.01, 0.0, 0.05],
+        "x2h": {"start": 0, "stop": 0.002, "step": 0.001},
+        "t_d": [0.8, 1.2],
+        "t_h": {"start": 1, "stop": 5, "step": 2},
+        "bottom": "axial",
+    }
+    validate(config, str(SCHEMA))
+    assert len(grid_points(config["spaces"]["x2"])) == 3 * 3 * 3 * 3 * 2 * 3
+
+
+BAD = [
+    ("mesh.refinement", -1, "refinement"),
+    ("mesh.refinement", 9, "refinement"),
+    ("mesh.element", "quad4", "element"),
+    ("mesh.edge_radius_mm", -0.1, "edge_radius_mm"),
+    ("mesh.outer_radius_factor", 0.5, "outer_radius_factor"),
+    ("mesh.smoothing", 1, "smoothing"),
+    ("spaces.paper.probes_mm", [0], "probes_mm"),
+    ("spaces.paper.probes_mm", [], "probes_mm"),
+    ("spaces.paper.x1d", {"start": 0.0, "stop": 0.1, "step": 0.01}, "x1d"),
+    ("spaces.paper.x1h", {"start": 1e-5, "stop": 1e-3, "step": -1e-4}, "x1h"),
+    ("spaces.paper.bottom", ["glued"], "bottom"),
+    ("spaces.paper.t_h", [0.0], "t_h"),
+    ("spaces.paper.thickness", [1.0], "thickness"),
+    ("spaces.bad/name", {"probes_mm": [6], "x1d": 0.01, "x1h": 0.001}, "bad/name"),
+    ("pressures_mbar", {"start": 10, "stop": 100, "step": 2}, "pressures_mbar"),
+    ("figure3.x1h", {"logspace": [-5, -1, 0]}, "x1h"),
+    ("figure3.pressure_mbar", -5, "pressure_mbar"),
+    ("identification", {"n": 1000}, "identification"),
+]
+
+
+def _set(config, dotted, value):
+    *parents, last = dotted.split(".")
+    node = config
+    for key in parents:
+        node = node[key]
+    node[last] = value
+
+
+@pytest.mark.parametrize("dotted,value,key", BAD, ids=[f"{d}={v}" for d, v, _ in BAD])
+def test_invalid_values_are_refused_naming_the_key(dotted, value, key):
+    config = copy.deepcopy(load("config"))
+    _set(config, dotted, value)
+    with pytest.raises(WorkflowError, match=re.escape(key)):
+        validate(config, str(SCHEMA))
+
+
+def test_workflow_stops_on_invalid_config_naming_the_key(tmp_path):
+    for part in ("Snakefile", "workflow", "config", "src"):
+        src = ROOT / part
+        if src.is_dir():
+            shutil.copytree(src, tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
+        else:
+            shutil.copy(src, tmp_path / part)
+    config = load("config")
+    config["mesh"]["refinement"] = -1
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump(config))
+    res = subprocess.run(
+        [sys.executable, "-m", "snakemake", "-n", "--configfile", "bad.yaml"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert res.returncode != 0
+    assert "Invalid configuration value for 'mesh.refinement'" in res.stdout + res.stderr
+
+
+def _pins(lines):
+    pins = {}
+    for line in lines:
+        m = re.match(r"^\s*-?\s*([A-Za-z0-9_.\-]+)==([^\s#]+)", line)
+        if m:
+            pins[m.group(1).lower()] = m.group(2)
+    return pins
+
+
+def test_environment_pins_are_exact_and_match_the_rule_environment():
+    lines = (ROOT / "environment.txt").read_text().splitlines()
+    reqs = [l.strip() for l in lines if l.strip() and not l.strip().startswith("#")]
+    assert reqs[-1] == "-e ."
+    assert all("==" in r for r in reqs[:-1]), reqs
+    pins = _pins(reqs)
+    for name in ("felupe", "snakemake", "snakemake-executor-plugin-slurm", "numpy", "scipy",
+                 "pandas", "pyarrow", "matplotlib", "pytest", "hypothesis", "pyyaml", "jsonschema"):
+        assert name in pins, name
+    assert pins["felupe"] == "11.3.0" and pins["snakemake"] == "9.27.1"
+    env = _pins((ROOT / "workflow" / "envs" / "skinsuction.yaml").read_text().splitlines())
+    assert env and all(pins[k] == v for k, v in env.items()), env

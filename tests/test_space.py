@@ -1,0 +1,394 @@
+"""Simulated-space database: grid axes, point ids, curve files, assembly, grid()."""
+
+import dataclasses
+import doctest
+import json
+import sys
+import types
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from skinsuction import provenance, space
+from skinsuction.space import (
+    COLUMNS,
+    SimulatedSpace,
+    assemble_space,
+    atomic_output,
+    compute_point,
+    expand_axis,
+    grid_points,
+    parse_point_id,
+    point_id,
+    read_curve,
+    read_space,
+    round_sig,
+    write_curve,
+)
+
+PAPER = {
+    "probes_mm": [2, 6],
+    "bottom": ["fixed"],
+    "x1d": {"start": 0.001, "stop": 0.091, "step": 0.009},
+    "x1h": {"start": 1.0e-5, "stop": 2.01e-3, "step": 2.0e-4},
+}
+
+
+@dataclasses.dataclass
+class StandInCurve:
+    """Stand-in with the attributes of skinsuction.model.Curve (for plumbing only)."""
+
+    pressure_mbar: np.ndarray
+    deflection_mm: np.ndarray
+    converged: bool
+    last_converged_mbar: float
+    reason: str = ""
+    newton_iterations: int = 0
+    dofs: int = 0
+    seconds: float = 0.0
+    info: dict = dataclasses.field(default_factory=dict)
+
+
+def stand_in_curve(params, pressures, fail_above=None):
+    """Deflection growing with pressure, softer for smaller moduli; optionally fails."""
+    p = np.asarray(pressures, float)
+    m = 0.01 * params["probe_mm"] * np.sqrt(p) / (params["x1d"] * 50 + params["x1h"] * 500) ** 0.3
+    if fail_above is None:
+        return StandInCurve(p, m, True, float(p[-1]), "", 3 * len(p), 1234, 0.5, {"stand_in": True})
+    ok = p <= fail_above
+    return StandInCurve(
+        p, np.where(ok, m, np.nan), False, float(p[ok][-1]), "newton diverged", 40, 1234, 0.7
+    )
+
+
+# ------------------------------------------------------------------------- axes
+def test_paper_axes_have_11_values_with_exact_endpoints():
+    x1d = expand_axis(PAPER["x1d"])
+    x1h = expand_axis(PAPER["x1h"])
+    assert len(x1d) == 11 and len(x1h) == 11
+    assert x1d[0] == 0.001 and x1d[-1] == 0.091
+    assert x1h[0] == 1e-5 and x1h[-1] == 2.01e-3
+    assert x1d[1] == 0.01 and x1h[2] == 0.00041  # values named in the paper
+    p = expand_axis({"start": 0, "stop": 100, "step": 2})
+    assert len(p) == 51 and p[0] == 0.0 and p[-1] == 100.0
+
+
+def test_logspace_scalar_and_list_axes():
+    ax = expand_axis({"logspace": [-5, -1, 13]})
+    assert len(ax) == 13 and ax[0] == 1e-5 and ax[-1] == 0.1 and ax[3] == 1e-4
+    assert expand_axis(0.08) == [0.08]
+    assert expand_axis([6, 2]) == [6.0, 2.0]
+    assert expand_axis(["fixed", "free"]) == ["fixed", "free"]
+
+
+@pytest.mark.parametrize(
+    "spec",
+    [
+        [],
+        [1.0, 1.0],
+        {"start": 1, "stop": 0, "step": 0.1},
+        {"start": 0, "stop": 1, "step": 0},
+        {"start": 0, "stop": 1},
+        {"logspace": [-5, -1, 0]},
+        {"values": [1]},
+        [float("nan")],
+        None,
+    ],
+)
+def test_bad_axes_are_refused(spec):
+    with pytest.raises(ValueError):
+        expand_axis(spec)
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    start=st.decimals(min_value="0", max_value="10", places=4),
+    step=st.decimals(min_value="0.0001", max_value="5", places=4),
+    n=st.integers(min_value=1, max_value=60),
+)
+def test_range_has_exact_length_and_endpoint(start, step, n):
+    stop = start + (n - 1) * step  # exact in decimal, rounded in binary
+    ax = expand_axis({"start": float(start), "stop": float(stop), "step": float(step)})
+    assert len(ax) == n
+    assert ax[-1] == round_sig(float(stop))
+    assert ax == sorted(ax)
+
+
+def test_grid_points_count_order_and_defaults():
+    pts = grid_points(PAPER)
+    assert len(pts) == 242
+    assert pts[0] == dict(probe_mm=2.0, bottom="fixed", x1d=0.001, x1h=1e-5, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0)
+    assert pts[1]["x1h"] == 0.00021  # X1h varies fastest among the material axes
+    assert len({point_id(p) for p in pts}) == 242
+    more = grid_points({**PAPER, "x2d": [0.0, 0.01], "t_h": {"start": 1, "stop": 3, "step": 1}})
+    assert len(more) == 242 * 2 * 3
+    with pytest.raises(ValueError, match="unknown"):
+        grid_points({**PAPER, "x3": [1]})
+    with pytest.raises(ValueError, match="bottom"):
+        grid_points({**PAPER, "bottom": ["glued"]})
+    assert len(grid_points({**PAPER, "pressure_mbar": 100}, ignore=("pressure_mbar",))) == 242
+
+
+# ---------------------------------------------------------------------- point ids
+def test_point_id_is_readable():
+    pid = point_id(dict(probe_mm=6, bottom="fixed", x1d=0.08, x1h=0.00041, x2d=0, x2h=0, t_d=1, t_h=1))
+    assert pid == "p6_fixed_x1d0.08_x1h0.00041_x2d0_x2h0_td1_th1"
+
+
+_value = st.floats(min_value=1e-9, max_value=1e4, allow_nan=False).map(round_sig)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    probe=_value,
+    bottom=st.sampled_from(space.BOTTOMS),
+    x1d=_value,
+    x1h=_value,
+    x2d=st.floats(min_value=-10, max_value=10, allow_nan=False).map(round_sig),
+    x2h=st.floats(min_value=-10, max_value=10, allow_nan=False).map(round_sig),
+    t_d=_value,
+    t_h=_value,
+)
+def test_point_id_round_trip(probe, bottom, x1d, x1h, x2d, x2h, t_d, t_h):
+    params = dict(probe_mm=probe, bottom=bottom, x1d=x1d, x1h=x1h, x2d=x2d, x2h=x2h, t_d=t_d, t_h=t_h)
+    pid = point_id(params)
+    assert "/" not in pid and " " not in pid
+    assert parse_point_id(pid) == params
+    import re
+
+    assert re.fullmatch(space.POINT_ID_PATTERN, pid)
+
+
+@pytest.mark.parametrize("bad", ["", "p6_fixed", "p6_glued_x1d1_x1h1_x2d0_x2h0_td1_th1", "p6_fixed_x1dabc_x1h1_x2d0_x2h0_td1_th1"])
+def test_parse_point_id_refuses_garbage(bad):
+    with pytest.raises(ValueError):
+        parse_point_id(bad)
+
+
+# -------------------------------------------------------------- curves and spaces
+PRESSURES = np.arange(0, 101, 10.0)
+
+
+def _write_points(tmp_path, points, fail=()):
+    paths = []
+    for params in points:
+        pid = point_id(params)
+        curve = stand_in_curve(params, PRESSURES, fail_above=40.0 if pid in fail else None)
+        path = tmp_path / "curves" / f"{pid}.parquet"
+        write_curve(curve, params, path, {"provenance": provenance.collect(), "source_hash": {"model": "abc"}})
+        paths.append(path)
+    return paths
+
+
+@pytest.fixture
+def small_space(tmp_path):
+    spec = {"probes_mm": [2, 6], "x1d": [0.01, 0.05, 0.09], "x1h": [1e-5, 1e-3]}
+    points = grid_points(spec)
+    failed = point_id(points[4])  # probe 2, x1d 0.05... one non-converged point
+    config = {"spaces": {"small": spec}, "mesh": {"refinement": 0.5}, "pressures_mbar": [0, 100]}
+    paths = _write_points(tmp_path, points, fail={failed})
+    out = tmp_path / "simulated_space" / "small.parquet"
+    assemble_space(paths, out, config, "small")
+    return out, points, failed
+
+
+def test_curve_file_round_trip(tmp_path):
+    params = grid_points({"probes_mm": 6, "x1d": 0.08, "x1h": 1e-4})[0]
+    path = tmp_path / "c.parquet"
+    write_curve(stand_in_curve(params, PRESSURES), params, path, {"note": "x"})
+    frame, meta = read_curve(path)
+    assert list(frame.columns) == list(COLUMNS)
+    assert len(frame) == len(PRESSURES)
+    assert frame["converged"].all() and (frame["point_id"] == point_id(params)).all()
+    assert meta["point"] == params and meta["note"] == "x" and meta["curve_info"] == {"stand_in": True}
+
+
+def test_assembly_keeps_failed_points(small_space):
+    out, points, failed = small_space
+    s = read_space(out)
+    assert list(s.frame.columns) == list(COLUMNS)
+    assert s.frame["point_id"].nunique() == len(points) == 12
+    assert len(s.frame) == 12 * len(PRESSURES)
+    bad = s.frame[s.frame["point_id"] == failed]
+    assert len(bad) == len(PRESSURES)
+    assert not bad["converged"].any()
+    assert (bad["last_converged_mbar"] == 40.0).all()
+    assert bad["reason"].iloc[0] == "newton diverged"
+    assert bad.loc[bad["pressure_mbar"] > 40, "deflection_mm"].isna().all()
+    assert bad.loc[bad["pressure_mbar"] <= 40, "deflection_mm"].notna().all()
+    assert s.points["converged"].sum() == 11
+
+
+def test_provenance_metadata_present(small_space):
+    out, points, failed = small_space
+    meta = read_space(out).metadata
+    assert meta["space"] == "small"
+    assert meta["config"]["mesh"] == {"refinement": 0.5}
+    assert meta["mesh"] == {"refinement": 0.5}
+    assert meta["n_points"] == 12 and meta["n_converged"] == 11
+    for pkg in ("felupe", "numpy", "scipy", "pandas", "pyarrow", "skinsuction", "python"):
+        assert meta["versions"][pkg], pkg
+    assert "commit" in meta["git"] and "dirty" in meta["git"]
+    assert meta["created_utc"].endswith("+00:00")
+    assert meta["points"][failed]["source_hash"] == {"model": "abc"}
+    assert meta["job_versions"] and meta["pressures_mbar"] == PRESSURES.tolist()
+    # the record is plain JSON in the Parquet schema metadata, readable without skinsuction
+    raw = pq.read_schema(out).metadata[b"skinsuction"]
+    assert json.loads(raw)["space"] == "small"
+
+
+def test_grid_shape_and_nan_for_failed_points(small_space):
+    out, points, failed = small_space
+    s = read_space(out)
+    x1d, x1h, p, m = s.grid(2.0)
+    assert x1d.tolist() == [0.01, 0.05, 0.09] and x1h.tolist() == [1e-5, 1e-3]
+    assert np.array_equal(p, PRESSURES)
+    assert m.shape == (3, 2, len(PRESSURES))
+    fp = parse_point_id(failed)
+    i, j = x1d.tolist().index(fp["x1d"]), x1h.tolist().index(fp["x1h"])
+    assert np.isnan(m[i, j, p > 40]).all() and np.isfinite(m[i, j, p <= 40]).all()
+    assert np.isfinite(np.delete(m.reshape(6, -1), i * 2 + j, axis=0)).all()
+    _, _, _, m_strict = s.grid(2.0, partial=False)
+    assert np.isnan(m_strict[i, j]).all()
+    # the 6 mm aperture has no failure; deflection grows with pressure
+    m6 = s.grid(6, bottom="fixed", x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0)[3]
+    assert np.isfinite(m6).all() and (np.diff(m6, axis=2) > 0).all()
+    with pytest.raises(KeyError, match="available"):
+        s.grid(4.0)
+
+
+def test_grid_marks_missing_points_nan(small_space):
+    out, points, failed = small_space
+    s = read_space(out)
+    drop = point_id(points[0])
+    holes = SimulatedSpace(s.frame[s.frame["point_id"] != drop].reset_index(drop=True), s.metadata)
+    m = holes.grid(2.0)[3]
+    assert m.shape == (3, 2, len(PRESSURES)) and np.isnan(m[0, 0]).all()
+
+
+def test_convergence_summary(small_space):
+    out, points, failed = small_space
+    summary = read_space(out).convergence_summary()
+    assert summary[["probe_mm", "n_points", "n_converged", "n_failed"]].values.tolist() == [
+        [2.0, 6, 5, 1],
+        [6.0, 6, 6, 0],
+    ]
+    assert summary.loc[0, "reasons"] == "newton diverged (1)"
+
+
+def test_assembly_refuses_duplicate_points(tmp_path):
+    params = grid_points({"probes_mm": 6, "x1d": 0.08, "x1h": 1e-4})[0]
+    (path,) = _write_points(tmp_path, [params])
+    with pytest.raises(ValueError, match="twice"):
+        assemble_space([path, path], tmp_path / "s.parquet", {"spaces": {}}, "s")
+
+
+# --------------------------------------------------------------------- atomicity
+def test_atomic_write_leaves_no_partial_file(tmp_path, monkeypatch):
+    params = grid_points({"probes_mm": 6, "x1d": 0.08, "x1h": 1e-4})[0]
+    target = tmp_path / "c.parquet"
+
+    def broken_write(table, where, *a, **k):
+        with open(where, "wb") as f:
+            f.write(b"PAR1 half a file")
+        raise OSError("disk full")
+
+    monkeypatch.setattr(pq, "write_table", broken_write)
+    with pytest.raises(OSError, match="disk full"):
+        write_curve(stand_in_curve(params, PRESSURES), params, target)
+    assert list(tmp_path.iterdir()) == []
+
+    monkeypatch.undo()
+    write_curve(stand_in_curve(params, PRESSURES), params, target)
+    before = target.read_bytes()
+    monkeypatch.setattr(pq, "write_table", broken_write)
+    with pytest.raises(OSError):
+        write_curve(stand_in_curve(params, PRESSURES, fail_above=20), params, target)
+    assert target.read_bytes() == before  # the old file is intact
+    assert [p.name for p in tmp_path.iterdir()] == ["c.parquet"]
+
+
+def test_atomic_output_on_success_and_error(tmp_path):
+    target = tmp_path / "sub" / "t.csv"
+    with pytest.raises(RuntimeError):
+        with atomic_output(target) as tmp:
+            tmp.write_text("partial")
+            raise RuntimeError
+    assert not target.exists() and list((tmp_path / "sub").iterdir()) == []
+    with atomic_output(target) as tmp:
+        tmp.write_text("whole")
+    assert target.read_text() == "whole"
+
+
+# ------------------------------------------------------------ the FE job adapter
+@pytest.fixture
+def stand_in_model(monkeypatch):
+    """Replace skinsuction.model by a stand-in module for the duration of a test."""
+    Curve = StandInCurve
+    calls = []
+
+    def simulate(x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, probe_mm=6.0, bottom="fixed",
+                 pressures_mbar=None, mesh=None):
+        params = dict(probe_mm=probe_mm, bottom=bottom, x1d=x1d, x1h=x1h, x2d=x2d, x2h=x2h, t_d=t_d, t_h=t_h)
+        calls.append((params, mesh))
+        if x1h > 0.05:
+            raise RuntimeError("mesh generator crashed")
+        c = stand_in_curve(params, pressures_mbar)
+        return Curve(c.pressure_mbar, c.deflection_mm, True, c.last_converged_mbar, dofs=10)
+
+    fake = types.ModuleType("skinsuction.model")
+    fake.Curve, fake.simulate = Curve, simulate
+    monkeypatch.setitem(sys.modules, "skinsuction.model", fake)
+    return calls
+
+
+def test_compute_point_writes_curve(tmp_path, stand_in_model):
+    pid = "p6_axial_x1d0.08_x1h0.001_x2d0_x2h0_td1_th1.5"
+    compute_point(pid, tmp_path / "c.parquet", PRESSURES, {"refinement": 0.5}, {"source_hash": {"model": "h"}})
+    params, mesh = stand_in_model[0]
+    assert params == parse_point_id(pid) and mesh == {"refinement": 0.5}
+    frame, meta = read_curve(tmp_path / "c.parquet")
+    assert frame["converged"].all() and (frame["dofs"] == 10).all()
+    assert meta["mesh"] == {"refinement": 0.5} and meta["source_hash"] == {"model": "h"}
+    assert meta["provenance"]["versions"]["felupe"]
+
+
+def test_compute_point_records_a_model_exception_as_failed_point(tmp_path, stand_in_model):
+    pid = "p6_fixed_x1d0.08_x1h0.1_x2d0_x2h0_td1_th1"
+    compute_point(pid, tmp_path / "c.parquet", PRESSURES)
+    frame, _ = read_curve(tmp_path / "c.parquet")
+    assert len(frame) == len(PRESSURES)
+    assert not frame["converged"].any() and frame["deflection_mm"].isna().all()
+    assert frame["reason"].iloc[0].startswith("exception: RuntimeError: mesh generator crashed")
+
+
+# ------------------------------------------------------------------- provenance
+def test_source_hash_changes_with_content(tmp_path):
+    (tmp_path / "model").mkdir()
+    (tmp_path / "model" / "a.py").write_text("x = 1\n")
+    (tmp_path / "model" / "__pycache__").mkdir()
+    (tmp_path / "model" / "__pycache__" / "a.pyc").write_bytes(b"junk")
+    h1 = provenance.source_hash("model", root=tmp_path)
+    (tmp_path / "model" / "__pycache__" / "a.pyc").write_bytes(b"other junk")
+    assert provenance.source_hash("model", root=tmp_path) == h1
+    (tmp_path / "model" / "a.py").write_text("x = 2\n")
+    assert provenance.source_hash("model", root=tmp_path) != h1
+    with pytest.raises(FileNotFoundError):
+        provenance.source_hash("nothing", root=tmp_path)
+
+
+def test_provenance_record_is_json(tmp_path):
+    rec = provenance.collect(config={"a": np.float64(1.5), "b": (1, 2)}, extra=np.arange(2))
+    assert json.loads(json.dumps(rec))["config"] == {"a": 1.5, "b": [1, 2]}
+    assert rec["extra"] == [0, 1]
+    assert provenance.git_info(tmp_path) == {"commit": None, "dirty": None, "root": None}
+
+
+@pytest.mark.parametrize("module", [space, provenance])
+def test_docstring_examples(module):
+    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+    assert result.failed == 0
