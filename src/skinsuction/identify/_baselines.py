@@ -117,8 +117,10 @@ def differential_evolution_fit(
     """``scipy.optimize.differential_evolution`` on the cost, vectorised.
 
     Defaults: ``polish=False`` (the polishing L-BFGS-B step does not cope with
-    +inf costs of non-converged regions) and ``tol=1e-10``; any option of
-    scipy's function can be passed.
+    +inf costs of non-converged regions), ``tol=1e-8`` and ``atol=1e-14``
+    (population spread of the cost, so in mm^2 for the single and weighted
+    objectives; an absolute floor is needed as the cost of an exact fit is 0);
+    any option of scipy's function can be passed.
 
     Examples
     --------
@@ -133,7 +135,8 @@ def differential_evolution_fit(
     t0 = time.perf_counter()
     lower, upper = (objective.lower, objective.upper) if bounds is None else bounds
     counted = _Counted(objective)
-    options = {"polish": False, "tol": 1e-10, "updating": "deferred", **de_options}
+    options = {"polish": False, "tol": 1e-8, "atol": 1e-14, "updating": "deferred",
+               **de_options}
     res = optimize.differential_evolution(
         counted.costs,
         list(zip(np.asarray(lower, float), np.asarray(upper, float))),

@@ -5,11 +5,13 @@ the identification -- deflections of the right size (about 1 mm at 100 mbar),
 stiffening with pressure, and a hypodermis that matters much more under the
 6 mm aperture than under the 2 mm one (paper, Figure 3).
 
-    M(p) = 0.5 a (p / k) / sqrt(1 + p / X1d),   k = X1d + (a / 1 mm)^2 X1h,
+    M(p) = 0.5 a (p / k) / sqrt(1 + (a / 1 mm) p / X1d),   k = X1d + (a / 1 mm)^2 X1h,
 
 with a = probe_mm / 2 (mm) and p in MPa (1 mbar = 1e-4 MPa).  The initial
-compliance sees both layers; the stiffening sees the dermis only, so the 6 mm
-curve determines both moduli.
+compliance sees both layers, the hypodermis more so under a wide aperture; the
+stiffening sees the dermis only and depends on the aperture.  So the 6 mm curve
+determines both moduli, the 2 mm curve hardly X1h, and the ratio of the two
+curves (eqs. 11-12) depends on both moduli.
 """
 
 from __future__ import annotations
@@ -40,14 +42,14 @@ def surrogate_deflection(x1d, x1h, pressure_mbar, probe_mm: float) -> np.ndarray
     Examples
     --------
     >>> round(float(surrogate_deflection(0.0055, 0.00041, [100.0], 6.0)[0]), 4)
-    0.9723
+    0.6425
     """
     a = 0.5 * float(probe_mm)
     p = 1e-4 * np.asarray(pressure_mbar, dtype=float)
     x1d = np.asarray(x1d, dtype=float)[..., None]
     x1h = np.asarray(x1h, dtype=float)[..., None]
     k = x1d + a**2 * x1h
-    return 0.5 * a * (p / k) / np.sqrt(1.0 + p / x1d)
+    return 0.5 * a * (p / k) / np.sqrt(1.0 + a * p / x1d)
 
 
 def analytic_surrogate_space(
