@@ -18,8 +18,8 @@ Examples
 ...     "deflection_mm": [1.2, 0.9], "reached": [True, True],
 ...     "last_converged_mbar": [100.0, 100.0], "deflection_last_mm": [1.2, 0.9]})
 >>> fig = plot_fig3(table)
->>> len(fig.axes)
-1
+>>> [ax.get_title() for ax in fig.axes]
+['(a) 6 mm aperture, $X_1^d$ = 0.08 MPa']
 """
 
 from __future__ import annotations
@@ -107,13 +107,14 @@ def plot_fig3(table: pd.DataFrame, xlim=(1e-5, 1e-1)):
     One panel per aperture, largest first ((a) 6 mm, (b) 2 mm), M at the maximal
     pressure vs X1h on a log axis, one line per interface condition. Points that
     did not reach the maximal pressure are hollow markers at their last converged
-    deflection, with a note in the panel.
+    deflection, explained in the legend.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     probes = sorted(table["probe_mm"].unique(), reverse=True)
     bottoms = [b for b in _style.BOTTOM_STYLE if b in set(table["bottom"])]
@@ -122,11 +123,12 @@ def plot_fig3(table: pd.DataFrame, xlim=(1e-5, 1e-1)):
         fig, axes = plt.subplots(
             1,
             len(probes),
-            figsize=(_style.WIDTH_IN * (0.5 * len(probes) if len(probes) > 1 else 0.55), 2.9),
+            figsize=(max(_style.WIDTH_IN * 0.5 * len(probes), 5.0), 3.2),
             squeeze=False,
             sharey=False,
         )
         axes = axes[0]
+        hollow_all, empty_all = 0, 0
         for n, (ax, probe) in enumerate(zip(axes, probes)):
             sub = table[table["probe_mm"] == probe]
             hollow_total, empty_total = 0, 0
@@ -141,6 +143,7 @@ def plot_fig3(table: pd.DataFrame, xlim=(1e-5, 1e-1)):
                     marker=st["marker"],
                     linestyle=st["linestyle"],
                     label=st["label"],
+                    clip_on=False,  # markers at the ends of the X1h range stay whole
                 )
                 bad = g[~g["reached"].astype(bool)]
                 shown = bad[np.isfinite(bad["deflection_last_mm"].astype(float))]
@@ -155,37 +158,40 @@ def plot_fig3(table: pd.DataFrame, xlim=(1e-5, 1e-1)):
                         markerfacecolor="none",
                         markeredgecolor=st["color"],
                         markersize=7,
+                        clip_on=False,
                     )
             ax.set_xscale("log")
-            lo = min(xlim[0], sub["x1h"].min() / 1.5) if len(sub) else xlim[0]
-            hi = max(xlim[1], sub["x1h"].max() * 1.5) if len(sub) else xlim[1]
+            # the paper's range; widened only for data outside it
+            lo, hi = xlim
+            if len(sub) and sub["x1h"].min() < lo:
+                lo = sub["x1h"].min() / 1.5
+            if len(sub) and sub["x1h"].max() > hi:
+                hi = sub["x1h"].max() * 1.5
             ax.set_xlim(lo, hi)
             ax.set_xlabel(r"hypodermis modulus $X_1^h$ (MPa)")
             ax.set_ylabel(f"deflection M at {pressure:g} mbar (mm)")
             x1d = sub["x1d"].unique()
             x1d_txt = f", $X_1^d$ = {x1d[0]:g} MPa" if len(x1d) == 1 else ""
             ax.set_title(f"({chr(ord('a') + n)}) {probe:g} mm aperture{x1d_txt}")
-            notes = []
-            if hollow_total:
-                notes.append(
-                    f"hollow: {hollow_total} point(s) not converged up to {pressure:g} mbar,\n"
-                    "shown at their last converged pressure (lower bound)"
-                )
-            if empty_total:
-                notes.append(f"{empty_total} point(s) without any converged increment (not shown)")
-            if notes:
-                ax.text(
-                    0.02,
-                    0.02,
-                    "\n".join(notes),
-                    transform=ax.transAxes,
-                    ha="left",
-                    va="bottom",
-                    fontsize=7,
-                    color="0.3",
-                )
-        axes[0].legend(loc="upper right", frameon=False)
-        fig.tight_layout()
+            hollow_all += hollow_total
+            empty_all += empty_total
+        handles, labels = axes[0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="lower center", ncol=len(labels), frameon=False,
+                   bbox_to_anchor=(0.5, 0.0))
+        bottom_margin = 0.11
+        if hollow_all or empty_all:
+            text = (
+                f"not converged up to {pressure:g} mbar ({hollow_all} point(s)): "
+                "M at the last converged pressure, a lower bound"
+            )
+            if empty_all:
+                text += f"; {empty_all} point(s) without any converged increment not shown"
+            hollow = Line2D([], [], linestyle="none", marker="o", markerfacecolor="none",
+                            markeredgecolor="0.3", markersize=7)
+            fig.legend([hollow], [text], loc="lower center", frameon=False,
+                       bbox_to_anchor=(0.5, 0.065))
+            bottom_margin = 0.17
+        fig.tight_layout(rect=(0, bottom_margin, 1, 1))
     return fig
 
 
