@@ -112,6 +112,17 @@ def test_interpolation_reproduces_bicubic_polynomials_off_grid(x1d):
         assert (err < 1e-11) == exact, (degree, err)
 
 
+def test_short_axis_uses_a_lower_order_stencil():
+    """3 nodes in X1h: quadratic there (and the un-fused code path) is exact."""
+    x1h = np.array([1e-5, 1e-3, 2.01e-3])
+    values = _tensor_polynomial(PAPER_X1D[:, None], x1h[None, :], 2)
+    space = GriddedSpace(PAPER_X1D, x1h, [50.0], values[..., None], 6.0)
+    rng = np.random.default_rng(5)
+    x = np.column_stack([rng.uniform(0.001, 0.091, 100), rng.uniform(1e-5, 2.01e-3, 100)])
+    got = SpaceInterpolant(space)(x)[:, 0]
+    np.testing.assert_allclose(got, _tensor_polynomial(x[:, 0], x[:, 1], 2), rtol=1e-10, atol=1e-12)
+
+
 def test_one_dimensional_weights_match_scipy_lagrange():
     ax = LagrangeAxis(PAPER_X1H)
     x = np.random.default_rng(3).uniform(PAPER_X1H[0], PAPER_X1H[-1], 50)

@@ -190,6 +190,11 @@ class SpaceInterpolant:
             stencils.reshape(self.axis_d.n_starts * self.axis_h.n_starts, md * mh, u)
         )
         self.n_points = u
+        # columns of the tensor-product weights, in the order of the stencil rows
+        self._outer_d = np.repeat(np.arange(md), mh)
+        self._outer_h = np.tile(np.arange(mh), md)
+        if md == mh:
+            self._table = np.concatenate([self.axis_d._table, self.axis_h._table])
         self._n_stencils = self._stencils.shape[0]
         self._work = np.empty((0, u))
 
@@ -215,9 +220,7 @@ class SpaceInterpolant:
             out = np.empty((n, self.n_points))
         if n == 0:
             return out
-        sd, wd = self.axis_d.weights(x[:, 0])
-        sh, wh = self.axis_h.weights(x[:, 1])
-        basis = (wd[:, :, None] * wh[:, None, :]).reshape(n, -1)  # (N, 16)
+        sd, sh, basis = self._basis(x)
         key = sd * self.axis_h.n_starts + sh
         if self._n_stencils < 2**15:
             key = key.astype(np.int16)  # radix sort below
@@ -236,6 +239,28 @@ class SpaceInterpolant:
             np.matmul(sorted_basis[a:b], self._stencils[sorted_key[a]], out=scratch[a:b])
         out[order] = scratch
         return out
+
+    def _basis(self, x):
+        """Stencil starts (N,), (N,) and tensor-product weights (N, md * mh)."""
+        ad, ah = self.axis_d, self.axis_h
+        if ad.m != ah.m:
+            sd, wd = ad.weights(x[:, 0])
+            sh, wh = ah.weights(x[:, 1])
+            return sd, sh, wd[:, self._outer_d] * wh[:, self._outer_h]
+        # both axes at once: one gather, one numerator evaluation for 2N points
+        n, m = x.shape[0], ad.m
+        xd, xh = x[:, 0], x[:, 1]
+        rd = np.searchsorted(ad.nodes, xd, side="right")
+        rh = np.searchsorted(ah.nodes, xh, side="right")
+        sd, sh = ad._start_of[rd], ah._start_of[rh]
+        table = self._table[np.concatenate([sd, sh + ad.n_starts])]  # (2N, 2m)
+        w = _numerators(np.concatenate([xd, xh])[:, None] - table[:, :m])
+        w /= table[:, m:]
+        basis = w[:n, self._outer_d] * w[n:, self._outer_h]
+        outside = (rd == 0) | ~(xd <= ad.nodes[-1]) | (rh == 0) | ~(xh <= ah.nodes[-1])
+        if outside.any():
+            basis[outside] = np.nan
+        return sd, sh, basis
 
     def _scratch(self, n: int) -> np.ndarray:
         if self._work.shape[0] < n:
