@@ -12,11 +12,13 @@ Properties that follow and that the tests check:
 * it is local, so a non-converged (NaN) node only spoils the values whose
   stencil contains it.
 
-NaN policy.  A value whose stencil holds a NaN node (with a non-zero weight) is
-NaN, and the objectives turn a NaN curve into cost = +inf, so the window focusing
-never selects such a candidate.  Points outside the grid are NaN too (no
-extrapolation).  A pressure that coincides with a grid node takes the node
-value, even if a neighbour node is NaN.
+NaN policy (non-converged FE points).  A curve value is NaN as soon as its
+stencil holds a NaN node: in (X1d, X1h) any node of the 4 x 4 stencil, so the
+usable region ends about one cell before a non-converged node; in p only nodes
+with a non-zero weight count, so a measured pressure that coincides with a grid
+pressure takes the node value even next to a NaN node.  The objectives turn a
+NaN curve into cost = +inf, so the window focusing never keeps such a candidate
+among the Nb best.  Points outside the grid are NaN too (no extrapolation).
 
 Speed.  The measured pressures are fixed during an identification, so the space
 is first interpolated in p once (:func:`interpolate_pressure`); every iteration
