@@ -86,7 +86,10 @@ def code_hash(*parts):
     Snakemake does not track imported modules; a param that changes with the
     code makes a changed module rerun exactly the rules that depend on it.
     """
-    return source_hash(*parts, root=SRC / "skinsuction")
+    try:
+        return source_hash(*parts, root=SRC / "skinsuction")
+    except FileNotFoundError:  # e.g. no model yet: the DAG is still valid, jobs fail on import
+        return "missing"
 
 
 # ------------------------------------------------------------------ input lists
