@@ -196,6 +196,7 @@ def collect(config=None, **extra) -> dict:
         "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "platform": platform.platform(),
         "executable": sys.executable,
+        "package_dir": str(PACKAGE_DIR),
         "versions": versions(),
         "git": git_info(),
         "config": config,
