@@ -392,3 +392,14 @@ def test_provenance_record_is_json(tmp_path):
 def test_docstring_examples(module):
     result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
     assert result.failed == 0
+
+
+def test_flat_public_api():
+    import skinsuction
+
+    assert skinsuction.read_space is read_space and skinsuction.expand_axis is expand_axis
+    assert skinsuction.SimulatedSpace is SimulatedSpace
+    assert skinsuction.provenance is provenance
+    assert {"simulate", "Curve", "read_space", "plot_fig3"} <= set(dir(skinsuction))
+    with pytest.raises(AttributeError):
+        skinsuction.no_such_name

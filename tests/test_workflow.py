@@ -265,7 +265,10 @@ def test_end_to_end_with_the_real_model(tmp_path):
 
     Fails, on purpose, while skinsuction.model does not provide simulate().
     """
-    from skinsuction.model import simulate  # noqa: F401  (fails loudly until the model exists)
+    import skinsuction
+    from skinsuction.model import Curve, simulate  # fails loudly until the model exists
+
+    assert skinsuction.simulate is simulate and skinsuction.Curve is Curve
 
     workdir = copy_workflow(tmp_path)
     args = write_config(workdir, "tiny", REAL_TINY)

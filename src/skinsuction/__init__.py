@@ -13,7 +13,8 @@ not need the FE stack until it is used:
 
 ``skinsuction.simulate`` and ``skinsuction.Curve`` come from
 :mod:`skinsuction.model`; ``read_space`` and ``SimulatedSpace`` from
-:mod:`skinsuction.space`.
+:mod:`skinsuction.space`; the public names of :mod:`skinsuction.identify` and
+:mod:`skinsuction.measured` (their ``__all__``) are available here as well.
 """
 
 from importlib import import_module as _import_module
@@ -49,8 +50,25 @@ _EXPORTS = {
 __all__ = sorted(_EXPORTS) + ["__version__"]
 
 
+#: modules whose ``__all__`` is part of the flat API too (looked up on first use)
+_FLAT_MODULES = ("skinsuction.identify", "skinsuction.measured")
+
+
+def _find(name):
+    for module in _FLAT_MODULES:
+        if name.startswith("_"):
+            break
+        try:
+            mod = _import_module(module)
+        except ImportError:
+            continue
+        if name in getattr(mod, "__all__", ()):
+            return module
+    return None
+
+
 def __getattr__(name):
-    module = _EXPORTS.get(name)
+    module = _EXPORTS.get(name) or _find(name)
     if module is None:
         raise AttributeError(f"module 'skinsuction' has no attribute {name!r}")
     if name == "provenance":
