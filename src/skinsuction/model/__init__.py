@@ -1,0 +1,16 @@
+"""The forward model of the suction test (axisymmetric, two layers, finite strain)."""
+
+from ._curve import Curve
+from ._geometry import MeshSettings, suction_mesh
+from ._material import SkinLayers, bulk_modulus
+from ._simulate import BOTTOM_CONDITIONS, SuctionTest, simulate
+
+__all__ = [
+    "BOTTOM_CONDITIONS",
+    "Curve",
+    "MeshSettings",
+    "SkinLayers",
+    "SuctionTest",
+    "bulk_modulus",
+    "simulate",
+]

@@ -1,0 +1,142 @@
+"""Graded axisymmetric mesh of the two skin layers under the probe."""
+
+from dataclasses import asdict, dataclass
+
+import felupe as fem
+import numpy as np
+
+
+@dataclass(frozen=True)
+class MeshSettings:
+    """Discretisation of the suction-test model.
+
+    Element sizes scale with the aperture radius ``a`` and are divided by
+    ``refinement``; they are smallest at the aperture edge (where the dome bends
+    sharply) and grow geometrically away from it.
+
+    Parameters
+    ----------
+    refinement : float
+        Divides every element size (1 is the default mesh, 2 halves the sizes).
+    element : {"quad8", "quad9"}
+        Serendipity or Lagrange quadratic quadrilaterals.
+    quadrature : {"full", "reduced"}
+        3x3 (full) or 2x2 (reduced) Gauss points.
+    edge_radius_mm : float
+        Radius of the rounded probe edge (0 is a sharp edge).
+    outer_radius_factor : float
+        Outer radius of the model as a multiple of ``a + t_d + t_h``.
+    edge_size : float
+        Element size at the aperture edge, as a fraction of ``a``.
+    far_size : float
+        Largest element size, as a fraction of ``a + t_d + t_h``.
+    growth : float
+        Largest ratio of neighbouring element sizes.
+    probe_wall : bool
+        Frictionless contact of the skin with the rigid inner wall of the probe.
+    wall_penalty : float
+        Penalty of the wall contact, relative to the mean nodal stiffness.
+    """
+
+    refinement: float = 1.0
+    element: str = "quad8"
+    quadrature: str = "full"
+    edge_radius_mm: float = 0.0
+    outer_radius_factor: float = 3.0
+    edge_size: float = 0.02
+    far_size: float = 0.25
+    growth: float = 1.3
+    probe_wall: bool = True
+    wall_penalty: float = 100.0
+
+    @classmethod
+    def from_dict(cls, settings=None):
+        """Build from a (config) dict, naming any unknown key."""
+        settings = dict(settings or {})
+        known = cls.__dataclass_fields__
+        unknown = sorted(set(settings) - set(known))
+        if unknown:
+            raise ValueError(
+                f"unknown mesh setting(s) {unknown}; known: {sorted(known)}"
+            )
+        return cls(**settings)
+
+    def to_dict(self):
+        return asdict(self)
+
+
+def graded_coordinates(length, size_start, size_end, growth):
+    """Node coordinates on ``[0, length]`` with element sizes growing geometrically
+    from ``size_start`` at 0 towards ``size_end``, by at most ``growth`` per element.
+
+    Examples
+    --------
+    >>> x = graded_coordinates(1.0, 0.01, 0.2, 1.3)
+    >>> float(x[0]), float(x[-1]), bool(np.all(np.diff(x) > 0))
+    (0.0, 1.0, True)
+    """
+    size_start = min(size_start, length)
+    sizes = []
+    total, size = 0.0, size_start
+    while total + size < length * (1 - 1e-9):
+        sizes.append(size)
+        total += size
+        size = min(size * growth, size_end)
+    sizes = np.array(sizes or [length])
+    # spread the remainder over all elements so that the last one is not a sliver
+    sizes *= length / sizes.sum()
+    return np.concatenate([[0.0], np.cumsum(sizes)])
+
+
+def two_sided(a, b, size_at_a, size_far, growth, size_at_b=None):
+    """Coordinates on ``[a, b]`` fine at ``a`` (and at ``b`` if ``size_at_b``)."""
+    if size_at_b is None:
+        return a + graded_coordinates(b - a, size_at_a, size_far, growth)
+    mid = 0.5 * (a + b)
+    left = a + graded_coordinates(mid - a, size_at_a, size_far, growth)
+    right = b - graded_coordinates(b - mid, size_at_b, size_far, growth)[::-1]
+    return np.concatenate([left, right[1:]])
+
+
+def suction_mesh(probe_mm, t_d, t_h, settings=MeshSettings()):
+    """Quadratic quadrilateral mesh of the dermis (top) over the hypodermis.
+
+    FElupe's axisymmetric fields take coordinate 0 as the axis (z, up) and
+    coordinate 1 as the radius (r). The skin surface is ``z = 0``; the bottom is
+    ``z = -(t_d + t_h)``.
+
+    Returns
+    -------
+    mesh : felupe.Mesh
+        The mesh (``quad8`` or ``quad9`` cells).
+    is_dermis : ndarray of bool
+        Per cell, True in the dermis.
+    """
+    a = probe_mm / 2
+    depth = t_d + t_h
+    h_edge = settings.edge_size * a / settings.refinement
+    h_far = settings.far_size * (a + depth) / settings.refinement
+    g = settings.growth
+    outer = settings.outer_radius_factor * (a + depth)
+
+    # radius: fine at the aperture edge on both sides, coarser at the axis and outside
+    r_in = two_sided(0.0, a, 4 * h_edge, h_far, g, size_at_b=h_edge)
+    r_out = two_sided(a, outer, h_edge, h_far, g)
+    r = np.concatenate([r_in, r_out[1:]])
+
+    # depth: fine under the surface, a node line on the dermis/hypodermis interface
+    z_d = -graded_coordinates(t_d, h_edge, h_far, g)
+    h_interface = abs(z_d[-1] - z_d[-2])
+    z_h = -t_d - graded_coordinates(t_h, h_interface, h_far, g)
+    z = np.sort(np.concatenate([z_d, z_h[1:]]))
+
+    mesh = fem.mesh.Grid(z, r)
+    mesh = mesh.add_midpoints_edges()
+    if settings.element == "quad9":
+        mesh = mesh.add_midpoints_faces()
+    elif settings.element != "quad8":
+        raise ValueError(f"mesh element must be 'quad8' or 'quad9', not {settings.element!r}")
+
+    centroid_z = mesh.points[mesh.cells[:, :4], 0].mean(axis=1)
+    is_dermis = centroid_z > -t_d
+    return mesh, is_dermis
