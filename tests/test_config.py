@@ -50,7 +50,7 @@ def test_paper_config_is_the_paper_study():
 def test_ci_config_is_coarse():
     config = load("ci")
     n = sum(len(grid_points(s)) for s in config["spaces"].values())
-    assert n <= 2 * 3 * 3
+    assert n <= 2 * 5 * 5  # 5 x 5: identification needs a few cubic cells (issue: identification)
     assert config["mesh"]["refinement"] <= 0.5
     assert 3 <= len(expand_axis(config["figure3"]["x1h"])) <= 4
 

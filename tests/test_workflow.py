@@ -81,7 +81,7 @@ def test_lint_is_clean(workdir):
     assert "Congratulations" in out, out
 
 
-@pytest.mark.parametrize("name,n_space", [("config", 242), ("ci", 18)])
+@pytest.mark.parametrize("name,n_space", [("config", 242), ("ci", 50)])
 def test_dry_run_lists_one_fe_job_per_grid_point(workdir, name, n_space):
     out = snakemake(
         workdir, "-n", "--configfile", f"config/{name}.yaml", "--replace-workflow-config"
