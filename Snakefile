@@ -6,6 +6,7 @@
 #   snakemake --report report.html                    # figures with captions
 #
 # config -> FE curves (one job per grid point) -> simulated spaces -> figures
+#        -> identifications (Figures 4, 4b, 7, 8, timing and optimiser tables)
 
 
 configfile: "config/config.yaml"
@@ -15,6 +16,12 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/simulate.smk"
 include: "workflow/rules/space.smk"
 include: "workflow/rules/figures.smk"
+
+
+if "identification" in config:
+
+    include: "workflow/rules/identify.smk"
+
 
 
 report: "workflow/report/workflow.rst"
@@ -27,4 +34,5 @@ localrules:
 rule all:
     input:
         final_outputs(),
+        IDENTIFICATION_OUTPUTS if "identification" in config else [],
     default_target: True

@@ -1,0 +1,395 @@
+"""Identification study (paper sections 3.2-3.3): Figures 4, 4b, 7, 8 and the tables.
+
+Included by the Snakefile when the configuration has an `identification` section.
+
+space + direct FE runs at the test point -> test curves -> runs of 100
+identifications per case (results/identification/) -> figures and tables.
+Every rule carries the hash of the package code it runs (params.code), so a
+change in identify/ or figures/ reruns exactly the rules that use it.
+"""
+
+ID = config["identification"]
+
+if ID["space"] not in SPACE_POINTS:
+    raise _config_error(
+        "identification.space",
+        f"{ID['space']!r} is not among spaces ({', '.join(SPACE_POINTS)})",
+    )
+_ID_PROBES = expand_axis(config["spaces"][ID["space"]]["probes_mm"])
+if not {2.0, 6.0} <= set(_ID_PROBES):
+    raise _config_error(
+        "identification.space",
+        f"space {ID['space']!r} needs the 2 and 6 mm probes, has {_ID_PROBES}",
+    )
+if ID["bottom"] not in expand_axis(config["spaces"][ID["space"]].get("bottom", ["fixed"])):
+    raise _config_error(
+        "identification.bottom", f"{ID['bottom']!r} is not a bottom of {ID['space']!r}"
+    )
+try:
+    ID_ALPHAS = expand_axis(ID["figure7"]["alphas"])
+    ID_LOOP_PRESSURES = expand_axis(ID["fe_in_the_loop"]["pressures_mbar"])
+except ValueError as err:
+    raise _config_error("identification", err)
+
+ID_SPACE = f"results/simulated_space/{ID['space']}.parquet"
+ID_TEST_POINTS = [
+    point_id(
+        {
+            "probe_mm": probe,
+            "bottom": ID["bottom"],
+            "x1d": ID["target"]["x1d"],
+            "x1h": ID["target"]["x1h"],
+        }
+    )
+    for probe in (2.0, 6.0)
+]
+ID_CURVES = "results/identification/test_curves.csv"
+ID_CODE = code_hash("identify", "space.py", "measured.py")
+ID_FIG_CODE = code_hash("identify", "figures", "space.py", "measured.py")
+
+IDENTIFICATION_OUTPUTS = [
+    "results/figures/fig4_single_probe.png",
+    "results/figures/fig4_single_probe.pdf",
+    "results/tables/fig4_single_probe.csv",
+    "results/figures/fig4b_cost_landscape.png",
+    "results/figures/fig4b_cost_landscape.pdf",
+    "results/tables/fig4b_cost_landscape.csv",
+    "results/figures/fig7_alpha.png",
+    "results/figures/fig7_alpha.pdf",
+    "results/tables/fig7_alpha.csv",
+    "results/tables/fig7_alpha_threshold.csv",
+    "results/figures/fig8_ratio.png",
+    "results/figures/fig8_ratio.pdf",
+    "results/tables/fig8_ratio.csv",
+    "results/tables/timing.csv",
+    "results/tables/timing.md",
+    "results/tables/optimiser_comparison.csv",
+    "results/tables/optimiser_comparison.md",
+]
+
+
+rule simulate_test_curve:
+    output:
+        curve="results/identification/test_curves/{point}.parquet",
+    log:
+        "logs/identification/test_curves/{point}.log",
+    benchmark:
+        "results/benchmarks/identification/test_curve_{point}.tsv"
+    params:
+        # same pressures and mesh as the simulated space: only the point is off the grid
+        pressures=PRESSURES,
+        mesh=config["mesh"],
+        code=code_hash("model"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=30,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/simulate_point.py"
+
+
+rule identification_test_curves:
+    input:
+        space=ID_SPACE,
+        fe=expand("results/identification/test_curves/{point}.parquet", point=ID_TEST_POINTS),
+    output:
+        curves=ID_CURVES,
+    log:
+        "logs/identification/test_curves.log",
+    params:
+        target=ID["target"],
+        bottom=ID["bottom"],
+        code=ID_CODE,
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/identification_test_curves.py"
+
+
+rule identification_runs:
+    input:
+        space=ID_SPACE,
+        curves=ID_CURVES,
+    output:
+        runs="results/identification/{study}_runs.csv",
+    log:
+        "logs/identification/{study}_runs.log",
+    benchmark:
+        "results/benchmarks/identification/{study}_runs.tsv"
+    wildcard_constraints:
+        study="single_probe|alpha_sweep|ratio",
+    params:
+        settings=ID,
+        alphas=ID_ALPHAS,
+        code=ID_CODE,
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=60,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/identification_runs.py"
+
+
+rule fig4_single_probe:
+    input:
+        runs="results/identification/single_probe_runs.csv",
+    output:
+        png=report(
+            "results/figures/fig4_single_probe.png",
+            caption="../report/fig4.rst",
+            category="Figures",
+            labels={"figure": "4", "format": "png"},
+        ),
+        pdf=report(
+            "results/figures/fig4_single_probe.pdf",
+            caption="../report/fig4.rst",
+            category="Figures",
+            labels={"figure": "4", "format": "pdf"},
+        ),
+        table=report(
+            "results/tables/fig4_single_probe.csv",
+            caption="../report/fig4.rst",
+            category="Tables",
+            labels={"table": "Figure 4"},
+        ),
+    log:
+        "logs/figures/fig4_single_probe.log",
+    params:
+        target=ID["target"],
+        success_tolerance=ID["success_tolerance"],
+        code=ID_FIG_CODE,
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/fig4_single_probe.py"
+
+
+rule fig4b_cost_landscape:
+    input:
+        space=ID_SPACE,
+        curves=ID_CURVES,
+    output:
+        png=report(
+            "results/figures/fig4b_cost_landscape.png",
+            caption="../report/fig4b.rst",
+            category="Figures",
+            labels={"figure": "4b", "format": "png"},
+        ),
+        pdf=report(
+            "results/figures/fig4b_cost_landscape.pdf",
+            caption="../report/fig4b.rst",
+            category="Figures",
+            labels={"figure": "4b", "format": "pdf"},
+        ),
+        table=report(
+            "results/tables/fig4b_cost_landscape.csv",
+            caption="../report/fig4b.rst",
+            category="Tables",
+            labels={"table": "Figure 4b"},
+        ),
+        landscape="results/identification/fig4b_landscape.parquet",
+    log:
+        "logs/figures/fig4b_cost_landscape.log",
+    params:
+        settings=ID,
+        code=ID_FIG_CODE,
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/fig4b_cost_landscape.py"
+
+
+rule fig7_alpha:
+    input:
+        runs="results/identification/alpha_sweep_runs.csv",
+    output:
+        png=report(
+            "results/figures/fig7_alpha.png",
+            caption="../report/fig7.rst",
+            category="Figures",
+            labels={"figure": "7", "format": "png"},
+        ),
+        pdf=report(
+            "results/figures/fig7_alpha.pdf",
+            caption="../report/fig7.rst",
+            category="Figures",
+            labels={"figure": "7", "format": "pdf"},
+        ),
+        table=report(
+            "results/tables/fig7_alpha.csv",
+            caption="../report/fig7.rst",
+            category="Tables",
+            labels={"table": "Figure 7"},
+        ),
+        threshold=report(
+            "results/tables/fig7_alpha_threshold.csv",
+            caption="../report/fig7.rst",
+            category="Tables",
+            labels={"table": "Figure 7, alpha threshold"},
+        ),
+    log:
+        "logs/figures/fig7_alpha.log",
+    params:
+        target=ID["target"],
+        success_tolerance=ID["success_tolerance"],
+        code=ID_FIG_CODE,
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/fig7_alpha.py"
+
+
+rule fig8_ratio:
+    input:
+        space=ID_SPACE,
+        curves=ID_CURVES,
+        runs="results/identification/ratio_runs.csv",
+    output:
+        png=report(
+            "results/figures/fig8_ratio.png",
+            caption="../report/fig8.rst",
+            category="Figures",
+            labels={"figure": "8", "format": "png"},
+        ),
+        pdf=report(
+            "results/figures/fig8_ratio.pdf",
+            caption="../report/fig8.rst",
+            category="Figures",
+            labels={"figure": "8", "format": "pdf"},
+        ),
+        table=report(
+            "results/tables/fig8_ratio.csv",
+            caption="../report/fig8.rst",
+            category="Tables",
+            labels={"table": "Figure 8"},
+        ),
+        ratio_curves="results/tables/fig8_ratio_curves.csv",
+    log:
+        "logs/figures/fig8_ratio.log",
+    params:
+        settings=ID,
+        code=ID_FIG_CODE,
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/fig8_ratio.py"
+
+
+rule timing_table:
+    input:
+        space=ID_SPACE,
+        curves=ID_CURVES,
+    output:
+        table=report(
+            "results/tables/timing.csv",
+            caption="../report/timing.rst",
+            category="Tables",
+            labels={"table": "timing", "format": "csv"},
+        ),
+        markdown=report(
+            "results/tables/timing.md",
+            caption="../report/timing.rst",
+            category="Tables",
+            labels={"table": "timing", "format": "md"},
+        ),
+        runs="results/identification/timing_runs.csv",
+    log:
+        "logs/identification/timing.log",
+    benchmark:
+        "results/benchmarks/identification/timing.tsv"
+    params:
+        settings=ID,
+        code=ID_FIG_CODE,
+    # all cores: the timed identifications run alone (they use one thread)
+    threads: workflow.cores
+    resources:
+        mem_mb=2000,
+        runtime=30,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/timing_table.py"
+
+
+rule fe_in_the_loop:
+    input:
+        space=ID_SPACE,
+    output:
+        result="results/identification/fe_in_the_loop.json",
+    log:
+        "logs/identification/fe_in_the_loop.log",
+    benchmark:
+        "results/benchmarks/identification/fe_in_the_loop.tsv"
+    params:
+        settings=ID,
+        loop=ID["fe_in_the_loop"],
+        pressures=ID_LOOP_PRESSURES,
+        code=code_hash("identify", "model", "space.py"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=120,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/fe_in_the_loop.py"
+
+
+rule optimiser_comparison:
+    input:
+        space=ID_SPACE,
+        curves=ID_CURVES,
+        fe_loop="results/identification/fe_in_the_loop.json",
+    output:
+        table=report(
+            "results/tables/optimiser_comparison.csv",
+            caption="../report/optimisers.rst",
+            category="Tables",
+            labels={"table": "optimisers", "format": "csv"},
+        ),
+        markdown=report(
+            "results/tables/optimiser_comparison.md",
+            caption="../report/optimisers.rst",
+            category="Tables",
+            labels={"table": "optimisers", "format": "md"},
+        ),
+        runs="results/identification/optimiser_runs.csv",
+    log:
+        "logs/identification/optimiser_comparison.log",
+    benchmark:
+        "results/benchmarks/identification/optimiser_comparison.tsv"
+    params:
+        settings=ID,
+        code=ID_FIG_CODE,
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=60,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/optimiser_comparison.py"
