@@ -81,6 +81,8 @@ __all__ = [
     "setup_from_files",
     "write_runs",
     "write_fe_in_the_loop",
+    "surrogate_curve",
+    "write_surrogate_space",
 ]
 
 #: The paper's test point (section 3.2): X1d, X1h in MPa.
@@ -830,3 +832,46 @@ def write_fe_in_the_loop(space_path, out_json, settings: dict, loop: dict,
     with atomic_output(out_json) as tmp:
         tmp.write_text(json.dumps(result, indent=2) + "\n", encoding="utf-8")
     return result
+
+
+def surrogate_curve(x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, probe_mm=6.0,
+                    bottom="fixed", pressures_mbar=None, mesh=None):
+    """The analytic surrogate as a :class:`skinsuction.model.Curve`-like object.
+
+    Same call as :func:`skinsuction.model.simulate`, no FE: for tests,
+    examples and plumbing runs of the workflow only.
+    """
+    from types import SimpleNamespace
+
+    from ._surrogate import surrogate_deflection
+
+    p = np.arange(0.0, 101.0, 2.0) if pressures_mbar is None else np.asarray(pressures_mbar, float)
+    m = surrogate_deflection(x1d, x1h, p, probe_mm)
+    return SimpleNamespace(pressure_mbar=p, deflection_mm=m, converged=True,
+                           last_converged_mbar=float(p[-1]), reason="", newton_iterations=0,
+                           dofs=0, seconds=0.0, info={"surrogate": True, "mesh": mesh})
+
+
+def write_surrogate_space(path, x1d, x1h, pressures_mbar, probes=(2.0, 6.0), *,
+                          curves_dir=None, name="surrogate") -> None:
+    """A simulated-space database filled with the analytic surrogate (not the FE model).
+
+    For tests and demonstrations of the identification without FE runs.  With
+    ``curves_dir`` the per-point curve files are written there as well (as the
+    workflow's ``results/curves``).
+    """
+    import tempfile
+    from pathlib import Path
+
+    from skinsuction.space import assemble_space, grid_points, point_id, write_curve
+
+    spec = {"probes_mm": list(probes), "x1d": list(x1d), "x1h": list(x1h)}
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(curves_dir) if curves_dir is not None else Path(tmp)
+        paths = []
+        for params in grid_points(spec):
+            c = surrogate_curve(**params, pressures_mbar=pressures_mbar)
+            paths.append(write_curve(c, params, folder / f"{point_id(params)}.parquet",
+                                     {"surrogate": True}))
+        assemble_space(paths, path, config={"spaces": {name: spec}, "surrogate": True},
+                       name=name)

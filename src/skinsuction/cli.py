@@ -1,0 +1,332 @@
+"""The ``skinsuction`` command: ``simulate`` a suction test, ``identify`` moduli.
+
+::
+
+    skinsuction simulate --probe 6 --x1d 0.08 --x1h 4.1e-4 [--out curve.csv]
+    skinsuction identify MEASURED.csv --space results/simulated_space/paper.parquet \\
+        --objective single|weighted|ratio [--probe 6] [--alpha 0.5] [--repeats 100] \\
+        [--seed 0] --out DIR
+
+Each subcommand is a :class:`Command` in :data:`COMMANDS`: a function that adds
+its arguments to an ``argparse`` parser and a function that runs it and returns
+the exit code.  A new subcommand (e.g. ``diagnose``) is one more entry.
+
+Exit codes: 0 success; 1 unexpected internal error (one line; ``--debug`` shows
+the traceback); 2 bad usage or bad input (one line naming the file, line and
+column where it applies, never a traceback); 3 ``simulate`` stopped before the
+last pressure (the partial curve is still written); 130 interrupted.
+
+Examples
+--------
+>>> main(["--version"])  # doctest: +ELLIPSIS
+skinsuction ...
+0
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from dataclasses import dataclass
+from typing import Callable
+
+__all__ = ["main", "build_parser", "COMMANDS", "Command", "CLIError"]
+
+EXIT_OK, EXIT_INTERNAL, EXIT_INPUT, EXIT_NOT_CONVERGED, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+
+
+class CLIError(Exception):
+    """A user-facing error: printed as one line, exits with ``code``."""
+
+    def __init__(self, message: str, code: int = EXIT_INPUT):
+        super().__init__(" ".join(str(message).split()))
+        self.code = code
+
+
+@dataclass(frozen=True)
+class Command:
+    """A subcommand: its help, how it adds its arguments, how it runs."""
+
+    name: str
+    help: str
+    description: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    run: Callable[[argparse.Namespace], int]
+
+
+# ------------------------------------------------------------ argument types
+def _number(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"not a finite number: {text!r}")
+    return value
+
+
+def positive(text: str) -> float:
+    value = _number(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
+    return value
+
+
+def non_negative(text: str) -> float:
+    value = _number(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    return value
+
+
+def unit_interval(text: str) -> float:
+    value = _number(text)
+    if not 0 <= value <= 1:
+        raise argparse.ArgumentTypeError(f"must lie in [0, 1], got {text}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {text}")
+    return value
+
+
+def _fmt(x) -> str:
+    x = float(x)
+    return "nan" if math.isnan(x) else f"{x:.10g}"
+
+
+# ------------------------------------------------------------------ simulate
+def _simulate_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--probe", type=positive, required=True, metavar="MM",
+                   help="aperture (probe) diameter in mm, e.g. 6 or 2")
+    p.add_argument("--x1d", type=positive, required=True, metavar="MPA",
+                   help="dermis modulus X1 in MPa (W = X1 (I1-3) + X2 (I1-3)^2), e.g. 0.08")
+    p.add_argument("--x1h", type=positive, required=True, metavar="MPA",
+                   help="hypodermis modulus X1 in MPa, e.g. 4.1e-4")
+    p.add_argument("--x2d", type=non_negative, default=0.0, metavar="MPA",
+                   help="dermis second-order modulus X2 in MPa (default 0: neo-Hookean)")
+    p.add_argument("--x2h", type=non_negative, default=0.0, metavar="MPA",
+                   help="hypodermis second-order modulus X2 in MPa (default 0: neo-Hookean)")
+    p.add_argument("--td", type=positive, default=1.0, metavar="MM",
+                   help="thickness of the dermis (with the epidermis) in mm (default 1)")
+    p.add_argument("--th", type=positive, default=1.0, metavar="MM",
+                   help="thickness of the hypodermis in mm (default 1)")
+    p.add_argument("--bottom", choices=("fixed", "axial", "free"), default="fixed",
+                   help="hypodermis/bone interface: fixed = restrained laterally and axially, "
+                        "axial = restrained axially only, free = not restrained "
+                        "(default fixed, as in the paper's identifications)")
+    p.add_argument("--refinement", type=positive, default=1.0, metavar="FACTOR",
+                   help="mesh density factor, dimensionless: 1 = reference mesh, "
+                        "2 = element sizes halved, 0.5 = doubled (default 1)")
+    p.add_argument("--out", metavar="FILE",
+                   help="write the CSV to FILE (atomically) instead of standard output")
+
+
+def _curve_csv(curve, args) -> str:
+    from skinsuction import __version__
+
+    lines = [
+        f"# skinsuction simulate {__version__}: apex deflection M(p) of the suction test",
+        f"# probe_mm: {_fmt(args.probe)}",
+        f"# x1d_mpa: {_fmt(args.x1d)}",
+        f"# x1h_mpa: {_fmt(args.x1h)}",
+        f"# x2d_mpa: {_fmt(args.x2d)}",
+        f"# x2h_mpa: {_fmt(args.x2h)}",
+        f"# t_d_mm: {_fmt(args.td)}",
+        f"# t_h_mm: {_fmt(args.th)}",
+        f"# bottom: {args.bottom}",
+        f"# refinement: {_fmt(args.refinement)}",
+        f"# converged: {'true' if curve.converged else 'false'}",
+        f"# last_converged_mbar: {_fmt(curve.last_converged_mbar)}",
+        f"# reason: {' '.join(str(curve.reason or '').split())}",
+        f"# newton_iterations: {int(curve.newton_iterations or 0)}",
+        f"# dofs: {int(curve.dofs or 0)}",
+        f"# seconds: {float(curve.seconds or 0.0):.3f}",
+        "pressure_mbar,deflection_mm",
+    ]
+    lines += [f"{_fmt(p)},{_fmt(m)}" for p, m in zip(curve.pressure_mbar, curve.deflection_mm)]
+    return "\n".join(lines) + "\n"
+
+
+def _run_simulate(args: argparse.Namespace) -> int:
+    from skinsuction import model
+
+    try:
+        curve = model.simulate(
+            args.x1d, args.x1h, args.x2d, args.x2h, args.td, args.th, args.probe, args.bottom,
+            pressures_mbar=None, mesh={"refinement": args.refinement},
+        )
+    except ValueError as err:  # parameters the model refuses
+        raise CLIError(f"the model refused the parameters: {err}") from None
+    text = _curve_csv(curve, args)
+    if args.out:
+        from skinsuction.space import atomic_output
+
+        try:
+            with atomic_output(args.out) as tmp:
+                tmp.write_text(text, encoding="utf-8")
+        except OSError as err:
+            raise CLIError(f"{args.out}: cannot write ({err.strerror or err})") from None
+    else:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    if not curve.converged:
+        print(f"skinsuction simulate: warning: the solver stopped at "
+              f"{_fmt(curve.last_converged_mbar)} mbar ({curve.reason}); "
+              "the curve is NaN beyond", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    return EXIT_OK
+
+
+# ------------------------------------------------------------------ identify
+def _identify_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("measured", metavar="MEASURED.csv",
+                   help="measured curves: CSV with columns probe_mm (mm), pressure_mbar "
+                        "(suction, positive, mbar), deflection_mm (apex deflection, mm) and "
+                        "optionally curve (replicate id); '#' lines are comments")
+    p.add_argument("--space", required=True, metavar="FILE",
+                   help="simulated space built by the workflow, "
+                        "e.g. results/simulated_space/paper.parquet")
+    p.add_argument("--objective", choices=("single", "weighted", "ratio"), required=True,
+                   help="single: one probe (paper eq. 4); weighted: 2 and 6 mm curves, "
+                        "alpha on 2 mm (eq. 10); ratio: 6 mm / 2 mm deflections (eqs. 11-12)")
+    p.add_argument("--probe", type=positive, default=6.0, metavar="MM",
+                   help="probe diameter in mm for --objective single (default 6)")
+    p.add_argument("--alpha", type=unit_interval, default=0.5,
+                   help="weight of the 2 mm curve for --objective weighted, "
+                        "dimensionless in [0, 1] (default 0.5)")
+    p.add_argument("--repeats", type=positive_int, default=100,
+                   help="independent window focusing runs; the estimate is their median "
+                        "(default 100, as in the paper)")
+    p.add_argument("--seed", type=int, default=0,
+                   help="random seed; the same seed gives the same result (default 0)")
+    p.add_argument("--curve", metavar="ID",
+                   help="replicate id (column 'curve') when the file holds several curves "
+                        "of a probe")
+    p.add_argument("--bottom", choices=("fixed", "axial", "free"), default="fixed",
+                   help="bottom condition of the space to use (default fixed)")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder: identification.json and fit.png / fit.pdf "
+                        "(measured vs fitted curves, residuals)")
+
+
+def _run_identify(args: argparse.Namespace) -> int:
+    from skinsuction.identify.measured_fit import identify_measured, write_identification
+
+    result = identify_measured(
+        args.measured, args.space, objective=args.objective, probe_mm=args.probe,
+        alpha=args.alpha, repeats=args.repeats, seed=args.seed, bottom=args.bottom,
+        curve=args.curve,
+    )
+    try:
+        paths = write_identification(result, args.out)
+    except OSError as err:
+        raise CLIError(f"{args.out}: cannot write ({err.strerror or err})") from None
+    est, spread, e = result["estimate"], result["spread"], result["E"]
+    unit = "" if e["unit"] == "1" else f" {e['unit']}"
+    e_txt = "n/a" if e["at_estimate"] is None or not math.isfinite(e["at_estimate"]) \
+        else f"{e['at_estimate']:.3g}{unit}"
+    print(f"X1d = {est['x1d_mpa']:.4g} MPa, X1h = {est['x1h_mpa']:.4g} MPa (median of "
+          f"{result['settings']['repeats']} repeats; interquartile range / median "
+          f"{100 * spread['x1d_relative_iqr']:.2g} % and {100 * spread['x1h_relative_iqr']:.2g} %), "
+          f"E = {e_txt}, median {result['iterations']['median']:g} iterations")
+    for w in result["warnings"]:
+        print(f"warning: {w}", file=sys.stderr)
+    print(f"wrote {paths['json']}, {paths['png']}, {paths['pdf']}")
+    return EXIT_OK
+
+
+# ------------------------------------------------------------------ registry
+COMMANDS = {
+    c.name: c
+    for c in (
+        Command(
+            "simulate",
+            "FE suction curve M(p) at one parameter point",
+            "Run the axisymmetric two-layer FE model of the suction test (pressures 0, 2, "
+            "..., 100 mbar) and print the apex deflection curve as CSV "
+            "(pressure_mbar,deflection_mm) after '#' comment lines with the settings and "
+            "the solver outcome (# converged: true|false, # last_converged_mbar, # reason). "
+            "Exit code 0 if every pressure converged, 3 if the solver stopped early "
+            "(the curve is still written, NaN beyond the last converged pressure).",
+            _simulate_arguments,
+            _run_simulate,
+        ),
+        Command(
+            "identify",
+            "identify X1d and X1h of a measured curve on a simulated space",
+            "Identify the dermis and hypodermis moduli (X1d, X1h; neo-Hookean) of a measured "
+            "suction test by window focusing on a precomputed simulated space (paper "
+            "sections 2.3-2.4, 3.2-3.3), repeated with independent seeds. Writes "
+            "DIR/identification.json (median estimate, spread over the repeats, E, "
+            "iterations, settings, SHA-256 of the inputs) and DIR/fit.png, DIR/fit.pdf "
+            "(measured vs fitted curves with residuals). Bad input gives a one-line error "
+            "naming the file, line and column, and exit code 2.",
+            _identify_arguments,
+            _run_identify,
+        ),
+    )
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser with every subcommand of :data:`COMMANDS`."""
+    from skinsuction import __version__
+
+    parser = argparse.ArgumentParser(
+        prog="skinsuction",
+        description="Elastic moduli of two skin layers (dermis, hypodermis) from suction "
+                    "tests by inverse finite-element analysis.",
+    )
+    parser.add_argument("--version", action="version", version=f"skinsuction {__version__}")
+    parser.add_argument("--debug", action="store_true",
+                        help="show the Python traceback of unexpected errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for c in COMMANDS.values():
+        p = sub.add_parser(c.name, help=c.help, description=c.description)
+        c.add_arguments(p)
+        p.set_defaults(run=c.run)
+    return parser
+
+
+def main(argv=None) -> int:
+    """Run the command line; returns the exit code (see the module docstring)."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:  # --help, --version, usage errors
+        return int(exit_.code or 0)
+    from skinsuction.identify.measured_fit import InputError
+    from skinsuction.measured import MeasuredDataError
+
+    try:
+        return args.run(args)
+    except CLIError as err:
+        code, message = err.code, str(err)
+    except (MeasuredDataError, InputError) as err:
+        code, message = EXIT_INPUT, str(err)
+    except KeyboardInterrupt:
+        print(f"skinsuction {args.command}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except BrokenPipeError:  # e.g. `skinsuction simulate ... | head`
+        sys.stderr.close()
+        return EXIT_OK
+    except Exception as err:  # noqa: BLE001 - one line unless --debug
+        if args.debug:
+            raise
+        code = EXIT_INTERNAL
+        message = (f"internal error: {type(err).__name__}: {err} "
+                   "(run with --debug for the traceback)")
+    print(f"skinsuction {args.command}: error: {' '.join(message.split())}", file=sys.stderr)
+    return code
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,334 @@
+"""Identify (X1d, X1h) of a measured suction test on a simulated space.
+
+What ``skinsuction identify`` runs: read and check the measured CSV
+(:func:`skinsuction.measured.load_measured`), build the objective (single
+probe, weighted or ratio) on the simulated space, run the window focusing
+``repeats`` times with independent seeds, and report the median estimate, the
+spread over the repeats, E (eq. 7), the iterations, the settings and the
+SHA-256 of the input files (:func:`identify_measured`); write them as
+``identification.json`` with a plot of measured against fitted curves and
+their residuals (:func:`write_identification`).
+
+Every problem of the inputs raises :class:`InputError` or
+:class:`skinsuction.measured.MeasuredDataError` (both ``ValueError``) with a
+one-line message.
+
+Examples
+--------
+>>> import tempfile, pathlib
+>>> from skinsuction.identify import analytic_surrogate_space, evaluate
+>>> s6 = analytic_surrogate_space(6.0)
+>>> d = pathlib.Path(tempfile.mkdtemp())
+>>> m = evaluate(s6, [[0.03, 0.0005]])[0]
+>>> _ = (d / "m.csv").write_text("probe_mm,pressure_mbar,deflection_mm\\n" + "".join(
+...     f"6,{p:g},{x:.6f}\\n" for p, x in zip(s6.pressure_mbar, m)))
+>>> r = identify_measured(d / "m.csv", spaces={6.0: s6}, repeats=3, seed=0)
+>>> round(r["estimate"]["x1d_mpa"], 5), round(r["estimate"]["x1h_mpa"], 7)
+(0.03, 0.0005)
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import hashlib
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ._objectives import ratio_objective, single_objective, weighted_objective
+from ._space import GriddedSpace
+from ._window_focusing import identify_repeated
+
+__all__ = ["InputError", "OBJECTIVE_KINDS", "identify_measured", "write_identification",
+           "file_sha256"]
+
+#: Objectives of ``skinsuction identify --objective``.
+OBJECTIVE_KINDS = ("single", "weighted", "ratio")
+
+#: Fraction of the window width within which an estimate counts as on the boundary.
+EDGE_FRACTION = 0.01
+
+#: Interquartile range / median of the repeats above which a warning is given.
+SPREAD_WARNING = 0.05
+
+
+class InputError(ValueError):
+    """An input of the identification (space file, choice of curves) is unusable."""
+
+
+def file_sha256(path) -> str:
+    """SHA-256 of a file's bytes (hex)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _read_space(space_path, bottom):
+    """The simulated space: ({probe: GriddedSpace}, metadata)."""
+    from skinsuction.space import read_space
+
+    path = Path(space_path)
+    if not path.is_file():
+        raise InputError(f"{path}: simulated space not found (build it with the workflow, "
+                         "e.g. `snakemake --cores 2`)")
+    try:
+        space = read_space(path)
+        slices = space.slices()
+    except Exception as err:  # pyarrow raises many types for a bad file
+        raise InputError(f"{path}: not a simulated-space database "
+                         f"({type(err).__name__}: {' '.join(str(err).split())[:200]})") from None
+    sel = slices[slices["bottom"] == bottom]
+    if sel.empty:
+        raise InputError(f"{path}: no points with bottom condition {bottom!r} "
+                         f"(available: {sorted(set(slices['bottom']))})")
+    spaces = {}
+    for probe in sorted(set(sel["probe_mm"].astype(float))):
+        try:
+            spaces[probe] = GriddedSpace.from_space(space, probe, bottom=bottom)
+        except ValueError as err:
+            raise InputError(f"{path}: the {probe:g} mm space is not a usable grid ({err})") from None
+    return spaces, space.metadata
+
+
+def _pick_curve(data, probe, curve_id, path):
+    curves = data.for_probe(probe)
+    if not curves:
+        have = ", ".join(f"{p:g}" for p in data.probes)
+        raise InputError(f"{path}: no {probe:g} mm curve in the file (probes in the file: {have} mm)")
+    if curve_id is not None:
+        curves = [c for c in curves if c.curve == str(curve_id)]
+        if not curves:
+            ids = [c.curve for c in data.for_probe(probe)]
+            raise InputError(f"{path}: no {probe:g} mm curve with id {curve_id!r} (ids: {ids})")
+    if len(curves) > 1:
+        ids = [c.curve for c in curves]
+        raise InputError(f"{path}: {len(curves)} curves of the {probe:g} mm probe ({ids}); "
+                         "choose one with --curve")
+    return curves[0]
+
+
+def identify_measured(
+    measured_path,
+    space_path=None,
+    *,
+    objective: str = "single",
+    probe_mm: float = 6.0,
+    alpha: float = 0.5,
+    repeats: int = 100,
+    seed: int = 0,
+    bottom: str = "fixed",
+    curve: str | None = None,
+    window_focusing: dict | None = None,
+    spaces: dict | None = None,
+) -> dict:
+    """Identify (X1d, X1h) of the measured curves in ``measured_path``.
+
+    Parameters
+    ----------
+    measured_path : path-like
+        Measured CSV (format: :mod:`skinsuction.measured`).
+    space_path : path-like
+        Simulated-space database (``results/simulated_space/<name>.parquet``).
+    objective : {"single", "weighted", "ratio"}
+        ``single``: the curve of ``probe_mm`` alone (eq. 4); ``weighted``: the 2
+        and 6 mm curves, ``alpha`` on 2 mm (eq. 10); ``ratio``: 6 mm / 2 mm
+        (eqs. 11-12).
+    probe_mm : float
+        Probe of the single objective (mm).
+    alpha : float in [0, 1]
+        Weight of the 2 mm curve in the weighted objective.
+    repeats : int
+        Independent window focusing runs (paper: 100).
+    seed : int
+        Seed of the runs (``numpy.random.SeedSequence(seed).spawn(repeats)``).
+    bottom : str
+        Bottom condition of the space to use.
+    curve : str, optional
+        Replicate id when the file holds several curves of a probe.
+    window_focusing : dict, optional
+        N, Nb, C, max_iter (``n_samples``, ``n_best``, ``tolerance``, ``max_iter``).
+    spaces : dict, optional
+        ``{probe_mm: GriddedSpace}`` instead of ``space_path`` (tests, notebooks).
+
+    Returns
+    -------
+    dict
+        JSON-able: ``estimate`` (median over the repeats, MPa), ``best_run``,
+        ``spread``, ``E``, ``iterations``, ``settings``, ``input``, ``space``,
+        ``fit`` (curves at the estimate, residuals), ``runs``, ``warnings``.
+    """
+    from skinsuction import __version__
+    from skinsuction.measured import load_measured
+
+    if objective not in OBJECTIVE_KINDS:
+        raise InputError(f"objective must be one of {OBJECTIVE_KINDS}, got {objective!r}")
+    if not 0.0 <= float(alpha) <= 1.0:
+        raise InputError(f"alpha must lie in [0, 1], got {alpha}")
+    if int(repeats) < 1:
+        raise InputError(f"repeats must be >= 1, got {repeats}")
+    if spaces is None:
+        spaces, space_meta = _read_space(space_path, bottom)
+        space_info = {"path": str(space_path), "sha256": file_sha256(space_path),
+                      "name": space_meta.get("space"),
+                      "git_commit": (space_meta.get("git") or {}).get("commit"),
+                      "mesh": space_meta.get("mesh")}
+    else:
+        space_info = {"path": None, "sha256": None, "name": "given in memory"}
+    probes_needed = [float(probe_mm)] if objective == "single" else [2.0, 6.0]
+    for p in probes_needed:
+        if not any(math.isclose(p, q, abs_tol=1e-6) for q in spaces):
+            have = ", ".join(f"{q:g}" for q in spaces)
+            raise InputError(f"{space_info['path']}: the simulated space has no {p:g} mm probe "
+                             f"(probes: {have} mm)")
+    all_probes = list(spaces)
+    spaces = {p: spaces[next(q for q in spaces if math.isclose(p, q, abs_tol=1e-6))]
+              for p in probes_needed}
+    p_lo = max(float(s.pressure_mbar[0]) for s in spaces.values())
+    p_hi = min(float(s.pressure_mbar[-1]) for s in spaces.values())
+    data = load_measured(measured_path, available_probes=all_probes,
+                         pressure_range_mbar=(p_lo, p_hi))
+    curves = {p: _pick_curve(data, p, curve, measured_path) for p in probes_needed}
+
+    if objective == "single":
+        (p,) = probes_needed
+        obj = single_objective(spaces[p], curves[p])
+    elif objective == "weighted":
+        obj = weighted_objective(spaces[2.0], curves[2.0], spaces[6.0], curves[6.0], alpha=alpha)
+    else:
+        try:
+            obj = ratio_objective(spaces[2.0], curves[2.0], spaces[6.0], curves[6.0])
+        except ValueError as err:
+            raise InputError(f"{measured_path}: ratio objective: {err}") from None
+    wf = {"n_samples": 1000, "n_best": 20, "tolerance": 1e-6, "max_iter": 200,
+          **(window_focusing or {})}
+    rep = identify_repeated(obj, repeats=int(repeats), seed=int(seed), **wf)
+
+    est = np.median(rep.estimates, axis=0)
+    j_est = float(obj(est.reshape(1, 2))[0])
+    e_est = float(obj.error(j_est))
+    best = int(np.argmin(rep.E))
+    q25, q75 = np.percentile(rep.estimates, [25, 75], axis=0)
+    warnings = []
+    width = obj.upper - obj.lower
+    for i, name in enumerate(("X1d", "X1h")):
+        if est[i] <= obj.lower[i] + EDGE_FRACTION * width[i] or \
+                est[i] >= obj.upper[i] - EDGE_FRACTION * width[i]:
+            warnings.append(f"{name} = {est[i]:.4g} MPa is at the edge of the simulated space "
+                            f"({obj.lower[i]:.4g}..{obj.upper[i]:.4g} MPa); the best value may "
+                            "lie outside it")
+    if not math.isfinite(e_est):
+        warnings.append("the median estimate falls where the space is not usable "
+                        "(non-converged FE points); see best_run")
+    if not rep.converged.all():
+        warnings.append(f"{int((~rep.converged).sum())} of {len(rep.converged)} runs hit "
+                        f"max_iter={wf['max_iter']} before the stop criterion")
+    rel_spread = rep.std / np.abs(rep.mean)
+    rel_iqr = (q75 - q25) / np.abs(est)
+    if rel_iqr.max() > SPREAD_WARNING:
+        warnings.append(f"the repeats disagree by more than {100 * SPREAD_WARNING:g} % "
+                        f"(interquartile range / median: X1d {100 * rel_iqr[0]:.1f} %, "
+                        f"X1h {100 * rel_iqr[1]:.1f} %): the curves do not pin both moduli down")
+
+    fit = {}
+    for p, c in curves.items():
+        fitted = single_objective(spaces[p], c).curves(est.reshape(1, 2))[0]
+        fit[f"{p:g}"] = {
+            "curve": c.curve,
+            "pressure_mbar": c.pressure_mbar.tolist(),
+            "measured_mm": c.deflection_mm.tolist(),
+            "fitted_mm": _finite_list(fitted),
+            "residual_um": _finite_list(1e3 * (c.deflection_mm - fitted)),
+        }
+
+    return {
+        "skinsuction_version": __version__,
+        "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "input": {
+            "path": str(measured_path),
+            "sha256": file_sha256(measured_path),
+            "metadata": dict(data.metadata),
+            "curves": {f"{p:g}": {"curve": c.curve, "first_line": c.first_line, "points": len(c)}
+                       for p, c in curves.items()},
+        },
+        "space": {**space_info,
+                  "bottom": bottom,
+                  "bounds_mpa": {"x1d": [float(obj.lower[0]), float(obj.upper[0])],
+                                 "x1h": [float(obj.lower[1]), float(obj.upper[1])]},
+                  "grid": {f"{p:g}": list(s.shape) for p, s in spaces.items()}},
+        "settings": {
+            "objective": objective,
+            "probe_mm": float(probe_mm) if objective == "single" else None,
+            "alpha": float(alpha) if objective == "weighted" else None,
+            "repeats": int(repeats),
+            "seed": int(seed),
+            "window_focusing": wf,
+            "excluded_pressures_mbar": (obj.excluded_pressures_mbar.tolist()
+                                        if objective == "ratio" else []),
+        },
+        "estimate": {"x1d_mpa": float(est[0]), "x1h_mpa": float(est[1]),
+                     "statistic": "median over the repeats"},
+        "best_run": {"x1d_mpa": float(rep.estimates[best, 0]),
+                     "x1h_mpa": float(rep.estimates[best, 1]), "E": float(rep.E[best])},
+        "spread": {
+            "x1d_std_mpa": float(rep.std[0]), "x1h_std_mpa": float(rep.std[1]),
+            "x1d_relative_std": float(rel_spread[0]), "x1h_relative_std": float(rel_spread[1]),
+            "x1d_relative_iqr": float(rel_iqr[0]), "x1h_relative_iqr": float(rel_iqr[1]),
+            "x1d_iqr_mpa": [float(q25[0]), float(q75[0])],
+            "x1h_iqr_mpa": [float(q25[1]), float(q75[1])],
+            "x1d_range_mpa": [float(rep.estimates[:, 0].min()), float(rep.estimates[:, 0].max())],
+            "x1h_range_mpa": [float(rep.estimates[:, 1].min()), float(rep.estimates[:, 1].max())],
+        },
+        "E": {"at_estimate": e_est, "median_over_runs": float(np.median(rep.E)),
+              "unit": obj.error_unit,
+              "definition": "eq. 7, (1/u) sqrt(sum of squared residuals)"},
+        "iterations": {"median": float(np.median(rep.iterations)),
+                       "max": int(rep.iterations.max()),
+                       "converged_fraction": float(rep.converged.mean())},
+        "fit": fit,
+        "runs": [{"x1d_mpa": float(x[0]), "x1h_mpa": float(x[1]), "E": float(e),
+                  "iterations": int(n)}
+                 for x, e, n in zip(rep.estimates, rep.E, rep.iterations)],
+        "warnings": warnings,
+    }
+
+
+def _finite_list(a):
+    return [float(x) if np.isfinite(x) else None for x in np.asarray(a, dtype=float)]
+
+
+def _strict_json(obj):
+    """``obj`` with NaN and infinities replaced by None (strict JSON has neither)."""
+    if isinstance(obj, dict):
+        return {k: _strict_json(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_strict_json(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def write_identification(result: dict, out_dir) -> dict:
+    """Write ``identification.json`` and ``fit.png`` / ``fit.pdf`` into ``out_dir`` (atomically).
+
+    Returns ``{"json": path, "png": path, "pdf": path}``.
+    """
+    import json
+
+    import matplotlib.pyplot as plt
+
+    from skinsuction.figures import _style
+    from skinsuction.figures.fit import plot_fit
+    from skinsuction.space import atomic_output
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"json": out / "identification.json", "png": out / "fit.png", "pdf": out / "fit.pdf"}
+    with atomic_output(paths["json"]) as tmp:
+        tmp.write_text(json.dumps(_strict_json(result), indent=2) + "\n", encoding="utf-8")
+    fig = plot_fit(result)
+    _style.save(fig, paths["png"], paths["pdf"])
+    plt.close(fig)
+    return paths
