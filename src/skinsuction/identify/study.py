@@ -429,13 +429,11 @@ def cost_landscape(setup: StudySetup, *, source="fe", points=151, alpha=0.5,
     return pd.concat(frames, ignore_index=True)
 
 
-def _contrast(g, axis, value):
-    """max E / min E along the grid line ``axis == value`` (how much the other modulus matters)."""
+def _line_max(g, axis, value):
+    """Largest finite E on the grid line ``axis == value`` (the other modulus varies)."""
     line = g[np.isclose(g[axis], value, rtol=1e-12)]["E"].to_numpy(float)
     line = line[np.isfinite(line)]
-    if line.size < 2 or line.min() <= 0:
-        return math.nan
-    return float(line.max() / line.min())
+    return float(line.max()) if line.size else math.nan
 
 
 def landscape_summary(landscape: pd.DataFrame, target=TARGET, factor: float = 2.0) -> pd.DataFrame:
@@ -445,8 +443,10 @@ def landscape_summary(landscape: pd.DataFrame, target=TARGET, factor: float = 2.
     and X1h ranges (as ratios max/min) tell how well each modulus is determined
     by the objective (for a curve inside the interpolated space E_min is about
     0 and the valley shrinks to the grid point nearest the truth).
-    ``x1h_contrast_at_true_x1d`` is max E / min E along X1h with X1d at the
-    truth: near 1 means the objective hardly sees the hypodermis.
+    ``E_max_along_x1h_at_true_x1d`` is the largest E over the X1h range with
+    X1d at the truth (how much a wrong X1h costs), ``E_max_along_x1d_at_true_x1h``
+    the same over X1d; their ratio ``x1h_to_x1d_sensitivity`` is small when the
+    objective hardly sees the hypodermis.
     """
     t = np.asarray(target, dtype=float)
     rows = []
@@ -471,11 +471,14 @@ def landscape_summary(landscape: pd.DataFrame, target=TARGET, factor: float = 2.
             "valley_x1h_max": float(valley["x1h"].max()),
             "valley_x1d_ratio": float(valley["x1d"].max() / valley["x1d"].min()),
             "valley_x1h_ratio": float(valley["x1h"].max() / valley["x1h"].min()),
-            "x1h_contrast_at_true_x1d": _contrast(g, "x1d", t[0]),
-            "x1d_contrast_at_true_x1h": _contrast(g, "x1h", t[1]),
+            "E_max_along_x1h_at_true_x1d": _line_max(g, "x1d", t[0]),
+            "E_max_along_x1d_at_true_x1h": _line_max(g, "x1h", t[1]),
             "fraction_not_usable": float(np.mean(~np.isfinite(e))),
         })
-    return pd.DataFrame(rows)
+    out = pd.DataFrame(rows)
+    out["x1h_to_x1d_sensitivity"] = (out["E_max_along_x1h_at_true_x1d"]
+                                     / out["E_max_along_x1d_at_true_x1h"])
+    return out
 
 
 # ------------------------------------------------------------------ timing
