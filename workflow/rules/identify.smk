@@ -324,8 +324,9 @@ rule timing_table:
     params:
         settings=ID,
         code=ID_FIG_CODE,
-    # all cores: the timed identifications run alone (they use one thread)
-    threads: workflow.cores
+    # two cores (capped at --cores): on the 2-core study machine the timed
+    # identifications, single-threaded, run with no other job beside them
+    threads: 2
     resources:
         mem_mb=2000,
         runtime=30,
