@@ -62,12 +62,10 @@ def test_defaults_are_filled_in():
         "figure3": {"probes_mm": [6], "x1d": 0.08, "x1h": {"logspace": [-5, -1, 3]}},
     }
     validate(config, str(SCHEMA))
-    assert config["mesh"] == {
-        "refinement": 1.0,
-        "element": "quad8",
-        "edge_radius_mm": 0.0,
-        "outer_radius_factor": 3.0,
-    }
+    # the schema's defaults are the model's own defaults
+    from skinsuction.model import MeshSettings
+
+    assert config["mesh"] == MeshSettings().to_dict()
     assert config["spaces"]["s"]["bottom"] == ["fixed"]
     assert config["spaces"]["s"]["x2d"] == [0.0] and config["spaces"]["s"]["t_h"] == [1.0]
     assert config["figure3"]["bottom"] == ["fixed", "axial", "free"]
@@ -93,7 +91,8 @@ BAD = [
     ("mesh.refinement", -1, "refinement"),
     ("mesh.refinement", 9, "refinement"),
     ("mesh.element", "quad4", "element"),
-    ("mesh.edge_radius_mm", -0.1, "edge_radius_mm"),
+    ("mesh.edge_size", 0.0, "edge_size"),
+    ("mesh.quadrature", "gauss", "quadrature"),
     ("mesh.outer_radius_factor", 0.5, "outer_radius_factor"),
     ("mesh.smoothing", 1, "smoothing"),
     ("spaces.paper.probes_mm", [0], "probes_mm"),

@@ -52,9 +52,18 @@ class SkinLayers:
         self.bulk = np.broadcast_to(np.asarray(bulk, dtype=float), self.x1.shape)
         self.x = [np.eye(3), np.zeros(0)]
 
-    def _kinematics(self, F):
-        J = np.linalg.det(F.transpose(2, 3, 0, 1))
-        iFT = np.linalg.inv(F.transpose(2, 3, 0, 1)).transpose(3, 2, 0, 1)
+    @staticmethod
+    def _kinematics(F):
+        # cofactor by cross products of the columns: faster than a batched
+        # np.linalg.inv of many 3x3 matrices, and J comes with it
+        cof = np.stack(
+            [np.cross(F[:, 1], F[:, 2], axis=0),
+             np.cross(F[:, 2], F[:, 0], axis=0),
+             np.cross(F[:, 0], F[:, 1], axis=0)],
+            axis=1,
+        )
+        J = np.einsum("iqc,iqc->qc", F[:, 0], cof[:, 0])
+        iFT = cof / J
         I1 = np.einsum("iJqc,iJqc->qc", F, F)
         G = J ** (-2 / 3)
         return J, iFT, I1, G
@@ -71,20 +80,21 @@ class SkinLayers:
         F = x[0]
         J, iFT, I1, G = self._kinematics(F)
         W1 = self.x1 + 2 * self.x2 * (G * I1 - 3)
-        W11 = 2 * self.x2
         dI1bar = G * (2 * F - 2 / 3 * I1 * iFT)
 
         def outer(A, B):
-            return np.einsum("iJqc,kLqc->iJkLqc", A, B)
+            return A[:, :, None, None] * B[None, None, :, :]
 
-        eye = np.eye(3)
-        iFT_iFT_cross = np.einsum("iLqc,kJqc->iJkLqc", iFT, iFT)
-        d2I1bar = G * (
-            2 * np.einsum("ik,JL->iJkL", eye, eye)[..., None, None]
-            - 4 / 3 * (outer(F, iFT) + outer(iFT, F))
-            + 4 / 9 * I1 * outer(iFT, iFT)
-            + 2 / 3 * I1 * iFT_iFT_cross
-        )
-        A = W11 * outer(dI1bar, dI1bar) + W1 * d2I1bar
-        A += self.bulk * ((2 * J - 1) * J * outer(iFT, iFT) - (J - 1) * J * iFT_iFT_cross)
+        # the terms of W1 d2(I1bar)/dFdF and of the penalty, grouped by tensor
+        # product so that few (3,3,3,3,q,c) temporaries are made
+        A = outer(iFT, (W1 * G * 4 / 9 * I1 + self.bulk * (2 * J - 1) * J) * iFT)
+        A += np.einsum("iLqc,kJqc->iJkLqc", iFT, (W1 * G * 2 / 3 * I1 - self.bulk * (J - 1) * J) * iFT)
+        B = outer(F, -4 / 3 * W1 * G * iFT)
+        A += B
+        A += B.transpose(2, 3, 0, 1, 4, 5)
+        A += outer(dI1bar, 2 * self.x2 * dI1bar)
+        diagonal = 2 * W1 * G
+        for i in range(3):
+            for j in range(3):
+                A[i, j, i, j] += diagonal
         return [A]

@@ -1,0 +1,137 @@
+"""Verification of the forward model against independent facts."""
+
+import felupe as fem
+import numpy as np
+import pytest
+
+from skinsuction.model import MeshSettings, SkinLayers, SuctionTest, bulk_modulus, simulate
+
+REFERENCE = dict(x1d=0.08, x1h=4.1e-4)
+
+
+def random_deformation(ncells=5, scale=0.2, seed=0):
+    rng = np.random.default_rng(seed)
+    return np.eye(3)[:, :, None, None] + scale * rng.standard_normal((3, 3, 4, ncells))
+
+
+def test_material_without_x2_is_felupes_neo_hooke():
+    F = random_deformation()
+    x1 = np.full(F.shape[-1], 0.3)
+    ours = SkinLayers(x1=x1, x2=0.0, bulk=bulk_modulus(x1))
+    felupes = fem.NeoHooke(mu=2 * 0.3, bulk=float(bulk_modulus(0.3)))
+    np.testing.assert_allclose(ours.gradient([F, None])[0], felupes.gradient([F, None])[0], atol=1e-12)
+    np.testing.assert_allclose(ours.hessian([F, None])[0], felupes.hessian([F, None])[0], atol=1e-12)
+
+
+def test_material_tangent_matches_finite_differences():
+    F = random_deformation(seed=1)
+    x1 = np.linspace(0.1, 0.5, F.shape[-1])
+    umat = SkinLayers(x1=x1, x2=0.7 * x1, bulk=bulk_modulus(x1))
+    A = umat.hessian([F, None])[0]
+    h = 1e-6
+    for k in range(3):
+        for L in range(3):
+            dF = np.zeros_like(F)
+            dF[k, L] = h
+            dP = (umat.gradient([F + dF, None])[0] - umat.gradient([F - dF, None])[0]) / (2 * h)
+            np.testing.assert_allclose(dP, A[:, :, k, L], atol=1e-8 * abs(A).max())
+
+
+def test_poisson_ratio_of_the_penalty():
+    # K / mu = 2 (1 + nu) / (3 (1 - 2 nu)) with mu = 2 X1
+    nu = 0.49
+    assert bulk_modulus(1.0, nu) / 2.0 == pytest.approx(2 * (1 + nu) / (3 * (1 - 2 * nu)))
+
+
+def test_small_strain_limit_is_the_half_space_aspiration_result():
+    """Theret et al. (1988): M = 3 a p Phi / (2 pi E), Phi = 2.0 ... 2.1."""
+    a, x1, p_mbar = 1.0, 1.0, 1.0
+    curve = simulate(x1, x1, t_d=5.0, t_h=5.0, probe_mm=2 * a, pressures_mbar=[0, p_mbar])
+    young = 2 * (2 * x1) * (1 + 0.49)
+    phi = curve.deflection_mm[-1] * 2 * np.pi * young / (3 * a * p_mbar * 1e-4)
+    assert 2.0 <= phi <= 2.1
+
+
+def test_mesh_convergence_differences_shrink():
+    """Nested refinements h, h/2, h/3: M increases monotonically towards its limit,
+    at an observed order above 1/2 (about 1: the glued aperture edge is singular)."""
+    pressures = np.linspace(0, 100, 11)
+    M = [
+        simulate(**REFERENCE, probe_mm=6, pressures_mbar=pressures,
+                 mesh={"edge_size": 0.024, "refinement": k}).deflection_mm[-1]
+        for k in (1, 2, 3)
+    ]
+    assert M[0] < M[1] < M[2]
+    # for M = L - C h^q: (M2 - M1) / (M3 - M2) = (1 - 2^-q) / (2^-q - 3^-q)
+    ratio = (M[1] - M[0]) / (M[2] - M[1])
+    q_half = (1 - 2**-0.5) / (2**-0.5 - 3**-0.5)
+    assert ratio > q_half
+
+
+def test_scaling_law_of_the_moduli_and_the_pressure():
+    """W is homogeneous of degree one in (X1, X2) and K scales with X1, so scaling
+    all moduli and the pressure by s leaves the deformation unchanged."""
+    s = 3.0
+    params = dict(x1d=0.02, x1h=5e-4, x2d=0.01, x2h=1e-4, probe_mm=6,
+                  mesh={"refinement": 0.5, "edge_size": 0.02})
+    pressures = np.array([0.0, 20.0, 40.0])
+    base = simulate(**params, pressures_mbar=pressures)
+    scaled = simulate(
+        **{**params, **{k: s * params[k] for k in ("x1d", "x1h", "x2d", "x2h")}},
+        pressures_mbar=s * pressures,
+    )
+    assert base.converged and scaled.converged
+    np.testing.assert_allclose(scaled.deflection_mm, base.deflection_mm, rtol=1e-10, atol=1e-14)
+
+
+def test_reference_deflections():
+    """Independent estimate for X1d = 0.08, X1h = 4.1e-4 MPa, fixed bottom."""
+    six = simulate(**REFERENCE, probe_mm=6, pressures_mbar=np.linspace(0, 100, 11))
+    two = simulate(**REFERENCE, probe_mm=2, pressures_mbar=np.linspace(0, 100, 11))
+    assert six.deflection_mm[-1] == pytest.approx(0.36, rel=0.01)
+    assert two.deflection_mm[-1] == pytest.approx(0.030, rel=0.01)
+
+
+def test_outer_radius_is_far_enough():
+    pressures = np.linspace(0, 100, 6)
+    near = simulate(**REFERENCE, probe_mm=6, pressures_mbar=pressures)
+    far = simulate(**REFERENCE, probe_mm=6, pressures_mbar=pressures,
+                   mesh={"outer_radius_factor": 4.5})
+    assert abs(far.deflection_mm[-1] / near.deflection_mm[-1] - 1) < 5e-4
+
+
+def test_probe_wall_changes_nothing_where_the_skin_stays_inside():
+    pressures = np.linspace(0, 100, 6)
+    wall = simulate(**REFERENCE, probe_mm=2, pressures_mbar=pressures, mesh={"edge_size": 0.02})
+    plain = simulate(**REFERENCE, probe_mm=2, pressures_mbar=pressures,
+                     mesh={"edge_size": 0.02, "probe_wall": False})
+    np.testing.assert_allclose(wall.deflection_mm, plain.deflection_mm, rtol=1e-9)
+
+
+def test_softer_bottom_conditions_deflect_more():
+    coarse = {"refinement": 0.5, "edge_size": 0.02}
+    M = {
+        bottom: simulate(0.08, 1e-3, probe_mm=6, bottom=bottom,
+                         pressures_mbar=[0, 50, 100], mesh=coarse).deflection_mm[-1]
+        for bottom in ("fixed", "axial", "free")
+    }
+    assert M["fixed"] < M["axial"] < M["free"]
+
+
+def test_a_run_that_cannot_finish_returns_its_partial_curve():
+    model = SuctionTest(**REFERENCE, probe_mm=6, mesh={"refinement": 0.5, "edge_size": 0.02})
+    curve = model.run(pressures_mbar=[0, 10, 20, 30], maxiter=1, iteration_budget=3)
+    assert not curve.converged
+    assert curve.reason.startswith("no equilibrium above")
+    finite = np.isfinite(curve.deflection_mm)
+    assert finite[0] and not finite[-1]
+    assert curve.last_converged_mbar == curve.pressure_mbar[finite][-1]
+
+
+def test_invalid_input_names_the_parameter():
+    with pytest.raises(ValueError, match="x1d"):
+        simulate(-0.01, 1e-4)
+    with pytest.raises(ValueError, match="bottom"):
+        simulate(0.01, 1e-4, bottom="glued")
+    with pytest.raises(ValueError, match="smoothing"):
+        MeshSettings.from_dict({"smoothing": 1})
