@@ -135,3 +135,28 @@ def test_invalid_input_names_the_parameter():
         simulate(0.01, 1e-4, bottom="glued")
     with pytest.raises(ValueError, match="smoothing"):
         MeshSettings.from_dict({"smoothing": 1})
+
+
+def test_prestress_tends_to_the_incompressible_membrane_result():
+    # equibiaxial plane stress of an incompressible neo-Hookean solid:
+    # sigma = mu (lambda^2 - lambda^-4), mu = 2 X1
+    from skinsuction.model import prestress
+
+    lam, x1 = 1.05, 0.1
+    assert prestress(lam, x1, poisson=0.49999) == pytest.approx(2 * x1 * (lam**2 - lam**-4), rel=2e-3)
+
+
+def test_prestretched_skin_is_in_equilibrium_before_suction():
+    model = SuctionTest(**REFERENCE, probe_mm=6, prestretch=1.05,
+                        mesh={"refinement": 0.5, "edge_size": 0.02})
+    f = model._residual()
+    assert np.linalg.norm(f[model.dof0]) > 0.1  # the outer ring holds the tension
+    assert np.linalg.norm(f[model.dof1]) < 1e-9 * np.linalg.norm(f[model.dof0])
+
+
+def test_pre_tension_stiffens_the_response():
+    pressures = [0, 50, 100]
+    coarse = {"refinement": 0.5, "edge_size": 0.02}
+    M = [simulate(**REFERENCE, probe_mm=6, pressures_mbar=pressures, mesh=coarse,
+                  prestretch=lam).deflection_mm[-1] for lam in (1.0, 1.01, 1.03)]
+    assert M[0] > M[1] > M[2]

@@ -2,7 +2,7 @@
 
 from ._curve import Curve
 from ._geometry import MeshSettings, suction_mesh
-from ._material import SkinLayers, bulk_modulus
+from ._material import SkinLayers, bulk_modulus, prestress, thickness_stretch
 from ._simulate import BOTTOM_CONDITIONS, SuctionTest, simulate
 
 __all__ = [
@@ -12,5 +12,7 @@ __all__ = [
     "SkinLayers",
     "SuctionTest",
     "bulk_modulus",
+    "prestress",
+    "thickness_stretch",
     "simulate",
 ]

@@ -32,10 +32,17 @@ class SkinLayers:
     per-cell arrays beyond 2048 cells (it evaluates in chunks), hence this class, which
     follows FElupe's material protocol (``gradient``/``hessian`` of ``[F, statevars]``).
 
+    An optional diagonal pre-deformation ``F0`` (per cell) makes the mesh's
+    configuration a pre-stretched one: the energy per unit of that configuration is
+    ``W(F F0) / det(F0)``, so the body is pre-stressed at ``F = 1``.
+
     Parameters
     ----------
     x1, x2, bulk : array_like
         Per-cell parameters, shape ``(ncells,)`` (or scalars), in MPa.
+    prestretch : array_like, optional
+        Diagonal of ``F0`` per cell, shape ``(3, ncells)`` (or ``(3,)``), in FElupe's
+        axisymmetric order (axial, radial, hoop). Default: no pre-stretch.
 
     Examples
     --------
@@ -46,11 +53,20 @@ class SkinLayers:
     True
     """
 
-    def __init__(self, x1, x2, bulk):
+    def __init__(self, x1, x2, bulk, prestretch=None):
         self.x1 = np.asarray(x1, dtype=float)
         self.x2 = np.broadcast_to(np.asarray(x2, dtype=float), self.x1.shape)
         self.bulk = np.broadcast_to(np.asarray(bulk, dtype=float), self.x1.shape)
         self.x = [np.eye(3), np.zeros(0)]
+        self.F0 = None
+        if prestretch is not None:
+            F0 = np.asarray(prestretch, dtype=float).reshape(3, -1)
+            # (F F0)_iJ = F_iJ F0_J: a column scaling, broadcast over Gauss points
+            self.F0 = F0[None, :, None, :]
+            self.J0 = np.prod(F0, axis=0)
+
+    def _pre(self, F):
+        return F if self.F0 is None else F * self.F0
 
     @staticmethod
     def _kinematics(F):
@@ -69,15 +85,25 @@ class SkinLayers:
         return J, iFT, I1, G
 
     def gradient(self, x):
-        F, statevars = x[0], x[-1]
+        F, statevars = self._pre(x[0]), x[-1]
+        P = self._gradient(F)
+        if self.F0 is not None:
+            P = P * self.F0 / self.J0
+        return [P, statevars]
+
+    def _gradient(self, F):
         J, iFT, I1, G = self._kinematics(F)
         W1 = self.x1 + 2 * self.x2 * (G * I1 - 3)
         dI1bar = G * (2 * F - 2 / 3 * I1 * iFT)
-        P = W1 * dI1bar + self.bulk * (J - 1) * J * iFT
-        return [P, statevars]
+        return W1 * dI1bar + self.bulk * (J - 1) * J * iFT
 
     def hessian(self, x):
-        F = x[0]
+        A = self._hessian(self._pre(x[0]))
+        if self.F0 is not None:
+            A = A * (self.F0[:, :, None, None] * self.F0[None, None] / self.J0)
+        return [A]
+
+    def _hessian(self, F):
         J, iFT, I1, G = self._kinematics(F)
         W1 = self.x1 + 2 * self.x2 * (G * I1 - 3)
         dI1bar = G * (2 * F - 2 / 3 * I1 * iFT)
@@ -97,4 +123,45 @@ class SkinLayers:
         for i in range(3):
             for j in range(3):
                 A[i, j, i, j] += diagonal
-        return [A]
+        return A
+
+
+def thickness_stretch(prestretch, x1, x2=0.0, poisson=0.49):
+    """Stretch through the thickness that keeps the skin surface traction-free under
+    an equibiaxial in-plane pre-stretch (plane stress, with the volumetric penalty).
+
+    Examples
+    --------
+    >>> round(float(thickness_stretch(1.0, 0.1)), 12)
+    1.0
+    >>> 0.90 < float(thickness_stretch(1.05, 0.1)) < 1 / 1.05
+    True
+    """
+    from scipy.optimize import brentq
+
+    if prestretch == 1:
+        return 1.0
+    umat = SkinLayers(x1=[x1], x2=[x2], bulk=bulk_modulus([x1], poisson))
+
+    def axial_stress(stretch):
+        F = np.diag([stretch, prestretch, prestretch])[:, :, None, None]
+        return float(umat.gradient([F, None])[0][0, 0, 0, 0])
+
+    return brentq(axial_stress, 0.05, 1.5, xtol=1e-14)
+
+
+def prestress(prestretch, x1, x2=0.0, poisson=0.49):
+    """In-plane Cauchy stress (MPa) of the pre-stretched, traction-free skin.
+
+    Examples
+    --------
+    >>> float(prestress(1.0, 0.1))
+    0.0
+    """
+    stretch = thickness_stretch(prestretch, x1, x2, poisson)
+    if stretch == 1.0:
+        return 0.0
+    F = np.diag([stretch, prestretch, prestretch])[:, :, None, None]
+    umat = SkinLayers(x1=[x1], x2=[x2], bulk=bulk_modulus([x1], poisson))
+    P = umat.gradient([F, None])[0]
+    return float(P[1, 1, 0, 0] * prestretch / (stretch * prestretch**2))

@@ -8,7 +8,7 @@ from scipy.sparse.linalg import splu
 
 from ._curve import Curve
 from ._geometry import MeshSettings, suction_mesh
-from ._material import SkinLayers, bulk_modulus
+from ._material import SkinLayers, bulk_modulus, thickness_stretch
 
 MBAR_TO_MPA = 1e-4
 BOTTOM_CONDITIONS = ("fixed", "axial", "free")
@@ -58,12 +58,15 @@ class SuctionTest:
         bottom="fixed",
         mesh=None,
         poisson=0.49,
+        prestretch=1.0,
     ):
         if bottom not in BOTTOM_CONDITIONS:
             raise ValueError(f"bottom must be one of {BOTTOM_CONDITIONS}, not {bottom!r}")
         for name, value in dict(x1d=x1d, x1h=x1h, t_d=t_d, t_h=t_h, probe_mm=probe_mm).items():
             if not value > 0:
                 raise ValueError(f"{name} must be positive, not {value!r}")
+        if not 0.5 <= prestretch <= 2.0:
+            raise ValueError(f"prestretch must be within [0.5, 2], not {prestretch!r}")
         for name, value in dict(x2d=x2d, x2h=x2h).items():
             if not value >= 0:
                 raise ValueError(f"{name} must be non-negative, not {value!r}")
@@ -73,7 +76,7 @@ class SuctionTest:
         self.settings = mesh
         self.parameters = dict(
             x1d=x1d, x1h=x1h, x2d=x2d, x2h=x2h, t_d=t_d, t_h=t_h,
-            probe_mm=probe_mm, bottom=bottom, poisson=poisson,
+            probe_mm=probe_mm, bottom=bottom, poisson=poisson, prestretch=prestretch,
         )
         self.mesh, is_dermis = suction_mesh(probe_mm, t_d, t_h, mesh)
         a = probe_mm / 2
@@ -95,6 +98,18 @@ class SuctionTest:
 
         x1 = np.where(is_dermis, x1d, x1h)
         x2 = np.where(is_dermis, x2d, x2h)
+        F0 = None
+        if prestretch != 1.0:
+            if mesh.formulation == "mixed":
+                raise ValueError("prestretch needs the displacement formulation")
+            # the mesh is the pre-stretched skin (thicknesses as measured in vivo);
+            # each layer contracts through its thickness so the surface is free
+            axial = np.where(
+                is_dermis,
+                thickness_stretch(prestretch, x1d, x2d, poisson),
+                thickness_stretch(prestretch, x1h, x2h, poisson),
+            )
+            F0 = np.stack([axial, np.full_like(axial, prestretch), np.full_like(axial, prestretch)])
         if mesh.formulation == "mixed":
             # cell-wise constant pressure and volume ratio (condensed): the volumetric
             # penalty acts on the mean dilatation of a cell, which avoids locking
@@ -104,7 +119,7 @@ class SuctionTest:
                 umat, self.field, bulk=bulk_modulus(x1, poisson)
             )
         else:
-            umat = SkinLayers(x1=x1, x2=x2, bulk=bulk_modulus(x1, poisson))
+            umat = SkinLayers(x1=x1, x2=x2, bulk=bulk_modulus(x1, poisson), prestretch=F0)
             self.solid = fem.SolidBody(umat, self.field)
 
         inside = np.isclose(z, 0, atol=tol) & (r <= a + tol)
@@ -138,6 +153,11 @@ class SuctionTest:
             boundaries["bottom"] = fem.Boundary(u, mask=bottom_nodes)
         elif bottom == "axial":
             boundaries["bottom"] = fem.Boundary(u, mask=bottom_nodes, skip=(0, 1))
+        if prestretch != 1.0:
+            # the skin beyond the model holds the in-plane tension
+            boundaries["outer"] = fem.Boundary(
+                u, mask=np.isclose(r, r.max(), atol=tol), skip=(1, 0)
+            )
         self.boundaries = boundaries
         self.dof0, self.dof1 = fem.dof.partition(self.field, boundaries)
         self.ext0 = fem.dof.apply(self.field, boundaries, self.dof0)
@@ -304,6 +324,7 @@ def simulate(
     bottom="fixed",
     pressures_mbar=None,
     mesh=None,
+    prestretch=1.0,
 ):
     """Apex deflection M(p) of a two-layer skin model under a suction probe.
 
@@ -323,6 +344,12 @@ def simulate(
         Suction pressures in mbar, from 0, ascending (default 0, 2, ..., 100).
     mesh : dict or MeshSettings, optional
         Discretisation settings (see :class:`MeshSettings`).
+    prestretch : float, optional
+        Equibiaxial in-plane pre-stretch lambda0 of both layers (natural skin
+        tension), applied before the probe is glued; the layers contract through
+        their thickness so that the surface stays traction-free, and the outer
+        radius holds the tension. The thicknesses are those of the pre-stretched
+        skin. 1 is none.
 
     Returns
     -------
@@ -336,5 +363,7 @@ def simulate(
     >>> curve.converged, bool(0.02 < curve.deflection_mm[-1] < 0.04)
     (True, True)
     """
-    model = SuctionTest(x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom, mesh)
+    model = SuctionTest(
+        x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom, mesh, prestretch=prestretch
+    )
     return model.run(pressures_mbar)
