@@ -168,6 +168,29 @@ class SuctionTest:
         """Current apex deflection (mm, positive into the probe)."""
         return float(self.field[0].values[self.apex, 0])
 
+    def largest_stretch(self):
+        """Largest principal stretch over the Gauss points, and where (z, r in mm)."""
+        F = self.field.extract()[0]
+        C = np.einsum("kIqc,kJqc->qcIJ", F, F)
+        stretch = np.sqrt(np.linalg.eigvalsh(C)[..., -1])
+        q, c = np.unravel_index(np.argmax(stretch), stretch.shape)
+        centre = self.mesh.points[self.mesh.cells[c, :4]].mean(axis=0)
+        return float(stretch[q, c]), centre
+
+    def distortion_note(self, pressures, deflection):
+        """Evidence for why a run stopped: the largest stretch of the last
+        equilibrium and whether M(p) was still straight (no limit point)."""
+        stretch, (z, r) = self.largest_stretch()
+        note = f"largest principal stretch {stretch:.2f} at z = {z:.3f}, r = {r:.3f} mm"
+        ok = np.flatnonzero(np.isfinite(deflection))
+        if len(ok) >= 4:
+            slope = np.diff(deflection[ok]) / np.diff(pressures[ok])
+            note += (
+                f"; dM/dp at the last equilibrium is {slope[-1] / slope[0]:.2f}x the "
+                "initial one"
+            )
+        return note
+
     def _residual(self):
         return fem.tools.fun(self.items, self.field)
 
@@ -299,6 +322,8 @@ class SuctionTest:
         u[:] = u_now
         self._residual()  # leave the bodies' stored state at the last equilibrium
         converged = not reason
+        if reason:
+            reason += "; " + self.distortion_note(p_out, deflection)
         last = p_now if converged else float(p_out[np.flatnonzero(np.isfinite(deflection))[-1]])
         return Curve(
             pressure_mbar=p_out,
