@@ -73,7 +73,7 @@ class IterationState:
     iteration: int
     lower: np.ndarray
     upper: np.ndarray
-    samples: np.ndarray  # (N, 2)
+    samples: np.ndarray  # (N, d)
     costs: np.ndarray  # (N,)
     best: np.ndarray  # indices of the Nb best samples, best first
     E: float
@@ -85,8 +85,9 @@ class WindowFocusingResult:
 
     Attributes
     ----------
-    estimate : ndarray (2,)
-        (X1d, X1h) in MPa, the best candidate of the last iteration.
+    estimate : ndarray (d,)
+        The best candidate of the last iteration: (X1d, X1h) in MPa for the
+        paper's objectives.
     E, E_unit : float, str
         Correlation error (eq. 7) of the estimate and its unit ("µm", or "1"
         for the dimensionless ratio objective).
@@ -135,8 +136,10 @@ def _bounds(objective, bounds):
         lower, upper = objective.lower, objective.upper
     else:
         lower, upper = bounds
-    lower = np.array(lower, dtype=float).reshape(2)
-    upper = np.array(upper, dtype=float).reshape(2)
+    lower = np.array(lower, dtype=float).reshape(-1)
+    upper = np.array(upper, dtype=float).reshape(-1)
+    if lower.size == 0 or lower.shape != upper.shape:
+        raise ValueError(f"window bounds of different or no dimension: {lower}, {upper}")
     if not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper)) and np.all(lower <= upper)):
         raise ValueError(f"invalid window bounds lower={lower}, upper={upper}")
     return lower, upper
@@ -158,8 +161,10 @@ def window_focusing(
     Parameters
     ----------
     objective : callable
-        ``objective(candidates (N, 2)) -> cost (N,)`` with attributes ``lower``,
-        ``upper``, ``error(cost)`` and ``error_unit`` (see ``_objectives``).
+        ``objective(candidates (N, d)) -> cost (N,)`` with attributes ``lower``,
+        ``upper`` (length d), ``error(cost)`` and ``error_unit`` (see
+        ``_objectives``).  The paper's problems have d = 2, (X1d, X1h); any
+        d >= 1 works (e.g. the extended models of :mod:`skinsuction.diagnose`).
     seed : int, numpy.random.SeedSequence or numpy.random.Generator
         Source of the random samples; required, so every run is reproducible.
     bounds : (lower, upper), optional
@@ -201,7 +206,7 @@ def window_focusing(
     e_history = []
     converged = False
     for j in range(1, max_iter + 1):
-        samples = lower + (upper - lower) * rng.random((n_samples, 2))  # eq. 5
+        samples = lower + (upper - lower) * rng.random((n_samples, lower.size))  # eq. 5
         costs = np.asarray(objective(samples), dtype=float)
         best = _n_smallest(costs, n_best)
         best = best[np.isfinite(costs[best])]
@@ -262,7 +267,7 @@ class RepeatedIdentification:
     def std(self) -> np.ndarray:
         """Sample standard deviation (ddof=1; 0 for one repeat)."""
         if len(self.estimates) < 2:
-            return np.zeros(2)
+            return np.zeros(self.estimates.shape[1])
         return self.estimates.std(axis=0, ddof=1)
 
     @property
