@@ -305,3 +305,37 @@ def test_workflow_reruns_follow_code_changes(workflow_run):
     assert counts.get("fig7_alpha") == 1
     assert "identification_runs" not in counts and "fe_in_the_loop" not in counts
     assert "Nothing to be done" in snakemake(wd, "-n", *args)
+
+
+# ------------------------------------------- NaN policy of the interpolation
+def test_shifted_stencils_keep_the_space_usable_next_to_a_failed_corner():
+    """One non-converged corner node (as X1d = 0.001, X1h = 1e-5 MPa of the FE space):
+    "strict" loses every cell whose centred stencil holds it; "shift" only the cell
+    that no NaN-free stencil contains, and stays exact for cubic data."""
+    from skinsuction.identify import GriddedSpace, SpaceInterpolant
+
+    x1d = np.linspace(0.001, 0.091, 11)
+    x1h = np.linspace(1e-5, 2.01e-3, 11)
+    p = np.array([0.0, 50.0, 100.0])
+    m = (x1d[:, None, None] ** 3 + 7 * x1h[None, :, None] ** 2) * (1 + p)  # cubic x quadratic
+    m[0, 0, 1:] = np.nan  # the corner fails above 0 mbar
+    space = GriddedSpace(x1d, x1h, p, m, 6.0)
+    strict, shift = SpaceInterpolant(space, "strict"), SpaceInterpolant(space)
+    near = np.array([[0.0055, 0.0004], [0.015, 0.0003], [0.0055, 0.00041]])
+    exact = (near[:, :1] ** 3 + 7 * near[:, 1:] ** 2) * (1 + p)
+    assert np.isnan(strict(near[:2])[:, 1:]).all()  # where the node is NaN
+    np.testing.assert_allclose(shift(near), exact, rtol=1e-10)
+    corner_cell = [[0.005, 1e-4]]  # between the failed node and its neighbours
+    assert np.isnan(shift(corner_cell)[0, 1:]).all()
+    # exact at every converged node, NaN nowhere else than in the corner cell
+    xd, xh = np.meshgrid(np.linspace(0.001, 0.091, 61), np.linspace(1e-5, 2.01e-3, 61),
+                         indexing="ij")
+    cand = np.column_stack([xd.ravel(), xh.ravel()])
+    values = shift(cand)
+    in_corner = (cand[:, 0] < x1d[1]) & (cand[:, 1] < x1h[1])
+    assert np.isfinite(values[~in_corner]).all()
+    np.testing.assert_allclose(values[~in_corner],
+                               ((cand[:, :1] ** 3 + 7 * cand[:, 1:] ** 2) * (1 + p))[~in_corner],
+                               rtol=1e-9)
+    with pytest.raises(ValueError, match="nan_policy"):
+        SpaceInterpolant(space, "ignore")

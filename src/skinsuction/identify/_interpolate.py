@@ -12,13 +12,22 @@ Properties that follow and that the tests check:
 * it is local, so a non-converged (NaN) node only spoils the values whose
   stencil contains it.
 
-NaN policy (non-converged FE points).  A curve value is NaN as soon as its
-stencil holds a NaN node: in (X1d, X1h) any node of the 4 x 4 stencil, so the
-usable region ends about one cell before a non-converged node; in p only nodes
-with a non-zero weight count, so a measured pressure that coincides with a grid
-pressure takes the node value even next to a NaN node.  The objectives turn a
-NaN curve into cost = +inf, so the window focusing never keeps such a candidate
-among the Nb best.  Points outside the grid are NaN too (no extrapolation).
+NaN policy (non-converged FE points).  A non-converged node value is never
+used.  In p only nodes with a non-zero weight count, so a measured pressure that
+coincides with a grid pressure takes the node value even next to a NaN node.  In
+(X1d, X1h), ``nan_policy="shift"`` (default): a candidate whose centred 4 x 4
+stencil holds a NaN node (at any of the pressures) uses the nearest NaN-free 4 x
+4 stencil that still contains its cell (shifted by one or two nodes, so still
+interpolation, exact for cubics); only cells that no NaN-free stencil contains
+give NaN.  The interpolant stays exact at the nodes but may jump across a cell
+edge where neighbouring cells use different stencils.  ``nan_policy="strict"``:
+NaN as soon as the centred stencil holds a NaN node, so the usable region ends
+about one cell before a non-converged node.  (With the paper's grid and a single
+non-converged corner X1d = 0.001, X1h = 1e-5 MPa, "strict" makes every candidate
+with X1d < 0.019 and X1h < 0.00041 MPa unusable -- the test point of the paper
+sits on that edge.)  The objectives turn a NaN curve into cost = +inf, so the
+window focusing never keeps such a candidate among the Nb best.  Points outside
+the grid are NaN too (no extrapolation).
 
 Speed.  The measured pressures are fixed during an identification, so the space
 is first interpolated in p once (:func:`interpolate_pressure`); every iteration
@@ -165,6 +174,8 @@ class SpaceInterpolant:
     space : GriddedSpace
         The space, already at the pressures wanted (see
         :func:`interpolate_pressure`).
+    nan_policy : {"shift", "strict"}
+        How stencils with non-converged (NaN) nodes are handled (module docstring).
 
     Examples
     --------
@@ -178,8 +189,14 @@ class SpaceInterpolant:
     True
     """
 
-    def __init__(self, space: GriddedSpace):
+    #: NaN policies of the (X1d, X1h) stencils (see the module docstring).
+    NAN_POLICIES = ("shift", "strict")
+
+    def __init__(self, space: GriddedSpace, nan_policy: str = "shift"):
+        if nan_policy not in self.NAN_POLICIES:
+            raise ValueError(f"nan_policy must be one of {self.NAN_POLICIES}, got {nan_policy!r}")
         self.space = space
+        self.nan_policy = nan_policy
         self.axis_d = LagrangeAxis(space.x1d)
         self.axis_h = LagrangeAxis(space.x1h)
         md, mh = self.axis_d.m, self.axis_h.m
@@ -199,6 +216,40 @@ class SpaceInterpolant:
             self._table = np.concatenate([self.axis_d._table, self.axis_h._table])
         self._n_stencils = self._stencils.shape[0]
         self._work = np.empty((0, u))
+        self._cell_starts = None  # (n1 + 1, n2 + 1, 2): stencil starts by searchsorted result
+        if nan_policy == "shift":
+            bad = np.isnan(self._stencils).any(axis=(1, 2))
+            if bad.any():
+                self._cell_starts = self._clean_starts(
+                    bad.reshape(self.axis_d.n_starts, self.axis_h.n_starts))
+
+    def _clean_starts(self, bad: np.ndarray) -> np.ndarray:
+        """Stencil starts (sd, sh) per (rd, rh) = searchsorted(side="right") results.
+
+        The centred starts where their stencil is NaN-free, else the NaN-free
+        starts closest to them among those whose stencil contains the cell.
+        """
+        ad, ah = self.axis_d, self.axis_h
+        nd, nh = ad.nodes.size, ah.nodes.size
+        table = np.empty((nd + 1, nh + 1, 2), dtype=np.intp)
+        for rd in range(nd + 1):
+            cd = min(max(rd - 1, 0), nd - 2)  # the cell (the last node belongs to the last)
+            sd0 = ad._start_of[rd]
+            options_d = range(max(cd - ad.m + 2, 0), min(cd, ad.n_starts - 1) + 1)
+            for rh in range(nh + 1):
+                ch = min(max(rh - 1, 0), nh - 2)
+                sh0 = ah._start_of[rh]
+                best = (sd0, sh0)
+                if bad[sd0, sh0]:
+                    options = [(abs(sd - sd0) + abs(sh - sh0), abs(sh - sh0), sd, sh)
+                               for sd in options_d
+                               for sh in range(max(ch - ah.m + 2, 0),
+                                               min(ch, ah.n_starts - 1) + 1)
+                               if not bad[sd, sh]]
+                    if options:
+                        best = min(options)[2:]
+                table[rd, rh] = best
+        return table
 
     @property
     def lower(self) -> np.ndarray:
@@ -245,6 +296,8 @@ class SpaceInterpolant:
     def _basis(self, x):
         """Stencil starts (N,), (N,) and tensor-product weights (N, md * mh)."""
         ad, ah = self.axis_d, self.axis_h
+        if self._cell_starts is not None:
+            return self._basis_from_starts(x)
         if ad.m != ah.m:
             sd, wd = ad.weights(x[:, 0])
             sh, wh = ah.weights(x[:, 1])
@@ -259,6 +312,26 @@ class SpaceInterpolant:
         w = _numerators(np.concatenate([xd, xh])[:, None] - table[:, :m])
         w /= table[:, m:]
         basis = w[:n, self._outer_d] * w[n:, self._outer_h]
+        outside = (rd == 0) | ~(xd <= ad.nodes[-1]) | (rh == 0) | ~(xh <= ah.nodes[-1])
+        if outside.any():
+            basis[outside] = np.nan
+        return sd, sh, basis
+
+    def _basis_from_starts(self, x):
+        """As :meth:`_basis`, with the stencil starts of ``_cell_starts`` (NaN policy "shift")."""
+        ad, ah = self.axis_d, self.axis_h
+        xd, xh = x[:, 0], x[:, 1]
+        rd = np.searchsorted(ad.nodes, xd, side="right")
+        rh = np.searchsorted(ah.nodes, xh, side="right")
+        starts = self._cell_starts[rd, rh]
+        sd, sh = starts[:, 0], starts[:, 1]
+        basis = []
+        for axis, xi, si in ((ad, xd, sd), (ah, xh, sh)):
+            table = axis._table[si]
+            w = _numerators(xi[:, None] - table[:, : axis.m])
+            w /= table[:, axis.m:]
+            basis.append(w)
+        basis = basis[0][:, self._outer_d] * basis[1][:, self._outer_h]
         outside = (rd == 0) | ~(xd <= ad.nodes[-1]) | (rh == 0) | ~(xh <= ah.nodes[-1])
         if outside.any():
             basis[outside] = np.nan

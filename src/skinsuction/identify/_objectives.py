@@ -106,6 +106,8 @@ class SingleObjective:
     curve : MeasuredCurve or (pressure_mbar, deflection_mm)
         The measured curve M(p).  Its pressures must lie inside the simulated
         pressure range; they need not be grid pressures.
+    nan_policy : {"shift", "strict"}
+        Stencils near non-converged points (see :class:`SpaceInterpolant`).
 
     Examples
     --------
@@ -120,7 +122,7 @@ class SingleObjective:
 
     error_unit = "µm"
 
-    def __init__(self, space: GriddedSpace, curve):
+    def __init__(self, space: GriddedSpace, curve, nan_policy: str = "shift"):
         p, m, probe = _curve_arrays(curve)
         if probe is not None and not np.isclose(float(probe), space.probe_mm):
             raise ValueError(
@@ -130,7 +132,7 @@ class SingleObjective:
         self.space = space
         self.pressure_mbar = p
         self.measured_mm = m
-        self.interpolant = SpaceInterpolant(interpolate_pressure(space, p))
+        self.interpolant = SpaceInterpolant(interpolate_pressure(space, p), nan_policy)
         self.n_points = p.size
         self.lower, self.upper = space.lower, space.upper
         self._buffer = np.empty((0, p.size))
@@ -249,7 +251,8 @@ class RatioObjective:
 
     error_unit = "1"
 
-    def __init__(self, space_2mm: GriddedSpace, curve_2mm, space_6mm: GriddedSpace, curve_6mm):
+    def __init__(self, space_2mm: GriddedSpace, curve_2mm, space_6mm: GriddedSpace, curve_6mm,
+                 nan_policy: str = "shift"):
         p2, m2, probe2 = _curve_arrays(curve_2mm)
         p6, m6, probe6 = _curve_arrays(curve_6mm)
         for probe, space in ((probe2, space_2mm), (probe6, space_6mm)):
@@ -270,8 +273,8 @@ class RatioObjective:
         p, m2, m6 = p[keep], m2[keep], m6[keep]
         self.pressure_mbar = p
         self.gamma = m6 / m2
-        self.objective_2mm = SingleObjective(space_2mm, (p, m2))
-        self.objective_6mm = SingleObjective(space_6mm, (p, m6))
+        self.objective_2mm = SingleObjective(space_2mm, (p, m2), nan_policy)
+        self.objective_6mm = SingleObjective(space_6mm, (p, m6), nan_policy)
         self.lower, self.upper = _bounds_of(self.objective_2mm, self.objective_6mm)
         self.n_points = p.size
 
@@ -297,20 +300,23 @@ class RatioObjective:
         return np.sqrt(2.0 * np.asarray(j, dtype=float)) / self.n_points
 
 
-def single_objective(space: GriddedSpace, curve) -> SingleObjective:
+def single_objective(space: GriddedSpace, curve, nan_policy: str = "shift") -> SingleObjective:
     """Single-probe objective (eq. 4); see :class:`SingleObjective`."""
-    return SingleObjective(space, curve)
+    return SingleObjective(space, curve, nan_policy)
 
 
 def weighted_objective(space_2mm: GriddedSpace, curve_2mm, space_6mm: GriddedSpace,
-                       curve_6mm, alpha: float = 0.5) -> WeightedObjective:
+                       curve_6mm, alpha: float = 0.5,
+                       nan_policy: str = "shift") -> WeightedObjective:
     """Weighted two-probe objective (eq. 10, ``alpha`` on 2 mm); see :class:`WeightedObjective`."""
     return WeightedObjective(
-        SingleObjective(space_2mm, curve_2mm), SingleObjective(space_6mm, curve_6mm), alpha
+        SingleObjective(space_2mm, curve_2mm, nan_policy),
+        SingleObjective(space_6mm, curve_6mm, nan_policy),
+        alpha,
     )
 
 
 def ratio_objective(space_2mm: GriddedSpace, curve_2mm, space_6mm: GriddedSpace,
-                    curve_6mm) -> RatioObjective:
+                    curve_6mm, nan_policy: str = "shift") -> RatioObjective:
     """Ratio objective (eqs. 11-12); see :class:`RatioObjective`."""
-    return RatioObjective(space_2mm, curve_2mm, space_6mm, curve_6mm)
+    return RatioObjective(space_2mm, curve_2mm, space_6mm, curve_6mm, nan_policy)
