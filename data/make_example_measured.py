@@ -9,6 +9,7 @@ deflection but the one at 0 mbar (the instrument zero).
     python data/make_example_measured.py [OUT.csv]
 """
 
+import subprocess
 import sys
 from pathlib import Path
 
@@ -34,8 +35,12 @@ def main(out=Path(__file__).with_name("example_measured.csv")):
         m = c.deflection_mm + rng.normal(0.0, NOISE_SD_MM, PRESSURES.size)
         m[PRESSURES == 0] = 0.0
         rows += [f"{probe:g},{p:g},{x:.5f}" for p, x in zip(PRESSURES, m)]
-    info = git_info()
-    commit = (info.get("commit") or "unknown") + (" (uncommitted changes)" if info.get("dirty") else "")
+    commit = git_info().get("commit") or "unknown"
+    model_dir = Path(__file__).resolve().parents[1] / "src" / "skinsuction" / "model"
+    status = subprocess.run(["git", "status", "--porcelain", "--", str(model_dir)],
+                            capture_output=True, text=True, cwd=model_dir).stdout
+    if status.strip():
+        commit += " (model sources with uncommitted changes)"
     header = [
         "# SYNTHETIC EXAMPLE, NOT A MEASUREMENT. Made by data/make_example_measured.py",
         "# with the skinsuction FE model (reference mesh, fixed bottom, layers 1 mm, neo-Hookean)",
