@@ -69,7 +69,7 @@ def plot_fig8(curves: pd.DataFrame, runs: pd.DataFrame, target=TARGET):
             for kind, color in (("M_6mm", "#1b6ca8"), ("M_2mm", "#d1495b")):
                 k = g[g["kind"] == kind]
                 a.plot(k["pressure_mbar"], k["value"], color=color, linestyle=dash[source],
-                       label=f"{kind.split('_')[1]} ({short})")
+                       label=f"{kind.split('_')[1].replace('mm', ' mm')} ({short})")
             k = g[g["kind"] == "Gamma"]
             b.plot(k["pressure_mbar"], k["value"], linestyle="none", marker=st["marker"],
                    markersize=3, color=st["color"], markerfacecolor=st["markerfacecolor"],
