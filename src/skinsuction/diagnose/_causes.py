@@ -1,0 +1,183 @@
+"""The registry of causes: physical hypotheses that extend the neo-Hookean model.
+
+A cause adds one parameter to the two-layer neo-Hookean model (X1d, X1h): a
+keyword of :func:`skinsuction.model.simulate` whose ``neutral`` value gives the
+baseline model back.  The registry is read from the configuration
+(``diagnosis.causes``), so a new cause is a configuration entry plus, if the
+model lacks it, a model option; nothing in the diagnosis is specific to one
+cause.
+
+The extended simulated spaces are stored as *rays* (see :mod:`._rays`): the
+scaling law ``M(s X1d, s X1h, s X2d, s X2h, s p) = M(X1d, X1h, X2d, X2h, p)``
+makes every dimensionless parameter (a ratio of moduli, a thickness, a stretch)
+a coordinate of the ray, while X1d only rescales the pressure.  A cause whose
+parameter is a modulus (``modulus: true``, e.g. X2d) therefore has the ray
+coordinate ``value / X1d``; any other parameter is its own coordinate.
+
+Examples
+--------
+>>> reg = default_registry()
+>>> sorted(reg)
+['dermis_thickness', 'pre_tension', 'strain_stiffening']
+>>> c = reg["strain_stiffening"]
+>>> c.symbol, c.unit, c.value(coordinate=2.0, x1d=0.05)
+('X2d', 'MPa', 0.1)
+>>> c.coordinate(value=0.1, x1d=0.05)
+2.0
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+__all__ = ["Cause", "NONE", "BASELINE", "registry_from_config", "default_registry",
+           "DEFAULT_CAUSES"]
+
+#: Name of the verdict "the neo-Hookean model explains the data".
+NONE = "none"
+#: Name of the baseline model (and of its ray space).
+BASELINE = "neo_hookean"
+
+
+@dataclass(frozen=True)
+class Cause:
+    """One candidate cause of misfit: a physical hypothesis with one extra parameter.
+
+    Attributes
+    ----------
+    name : str
+        Registry key, e.g. ``"strain_stiffening"``.
+    keyword : str
+        Keyword of :func:`skinsuction.model.simulate` that sets the parameter
+        (``x2d``, ``t_d``, ``prestretch``, ...).
+    symbol : str
+        Name of the parameter in reports (``X2d``, ``t_d``, ``lambda0``).
+    unit : str
+        Unit of the parameter (``MPa``, ``mm``, ``1``).
+    modulus : bool
+        True if the parameter is a modulus: it scales with X1d and the ray
+        coordinate is ``value / X1d``; otherwise the coordinate is the value.
+    neutral : float
+        Coordinate of the baseline model (0 for X2d, 1 mm for t_d, 1 for lambda0);
+        must be one of ``nodes``.
+    nodes : tuple of float
+        Ray coordinates simulated (ascending); the space spans ``nodes[0]..nodes[-1]``.
+    hypothesis : str
+        The physical hypothesis, one sentence.
+    description : str
+        What the parameter is, for reports.
+    """
+
+    name: str
+    keyword: str
+    symbol: str
+    unit: str
+    modulus: bool
+    neutral: float
+    nodes: tuple
+    hypothesis: str = ""
+    description: str = ""
+    coordinate_name: str = field(default="")
+
+    def __post_init__(self):
+        nodes = tuple(float(v) for v in self.nodes)
+        object.__setattr__(self, "nodes", nodes)
+        object.__setattr__(self, "neutral", float(self.neutral))
+        if len(nodes) < 2 or not np.all(np.diff(nodes) > 0):
+            raise ValueError(f"cause {self.name!r}: nodes must be >= 2 ascending values, "
+                             f"got {list(nodes)}")
+        if not any(np.isclose(self.neutral, v, rtol=0, atol=1e-12) for v in nodes):
+            raise ValueError(f"cause {self.name!r}: the neutral value {self.neutral:g} (baseline "
+                             f"model) must be one of the nodes {list(nodes)}")
+        if self.name in (NONE, BASELINE):
+            raise ValueError(f"{self.name!r} is reserved and cannot name a cause")
+        if not self.coordinate_name:
+            object.__setattr__(self, "coordinate_name",
+                               f"{self.symbol}/X1d" if self.modulus else self.symbol)
+
+    @property
+    def lower(self) -> float:
+        return self.nodes[0]
+
+    @property
+    def upper(self) -> float:
+        return self.nodes[-1]
+
+    def value(self, coordinate, x1d):
+        """Parameter value (in ``unit``) of a ray coordinate at a given X1d (MPa)."""
+        c = np.asarray(coordinate, dtype=float)
+        out = c * np.asarray(x1d, dtype=float) if self.modulus else c
+        return float(out) if np.ndim(out) == 0 else out
+
+    def coordinate(self, value, x1d):
+        """Ray coordinate of a parameter value at a given X1d (MPa)."""
+        v = np.asarray(value, dtype=float)
+        out = v / np.asarray(x1d, dtype=float) if self.modulus else v
+        return float(out) if np.ndim(out) == 0 else out
+
+    def simulate_keywords(self, coordinate, x1d) -> dict:
+        """Keywords of :func:`skinsuction.model.simulate` for this coordinate."""
+        return {self.keyword: float(self.value(coordinate, x1d))}
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["nodes"] = list(self.nodes)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Cause":
+        return cls(**{k: v for k, v in d.items() if k in cls.__dataclass_fields__})
+
+
+#: Built-in registry, the same as ``diagnosis.causes`` of config/config.yaml.
+DEFAULT_CAUSES = {
+    "strain_stiffening": dict(
+        keyword="x2d", symbol="X2d", unit="MPa", modulus=True, neutral=0.0,
+        nodes=[0.0, 2.0, 4.0, 8.0, 16.0, 32.0],
+        hypothesis="the dermis stiffens faster with strain than neo-Hookean (collagen "
+                   "recruitment): W = X1 (I1 - 3) + X2 (I1 - 3)^2 (paper eq. 9)",
+        description="second-order modulus X2 of the dermis (MPa)",
+    ),
+    "dermis_thickness": dict(
+        keyword="t_d", symbol="t_d", unit="mm", modulus=False, neutral=1.0,
+        nodes=[0.5, 0.75, 1.0, 1.5, 2.0, 2.5],
+        hypothesis="the dermis is not 1 mm thick (in vivo about 0.5-2.5 mm with site "
+                   "and age)",
+        description="thickness of the dermis with the epidermis (mm)",
+    ),
+    "pre_tension": dict(
+        keyword="prestretch", symbol="lambda0", unit="1", modulus=False, neutral=1.0,
+        nodes=[1.0, 1.03, 1.06, 1.09, 1.12],
+        hypothesis="the skin is under natural in-plane tension before the probe is "
+                   "glued (reported initial stresses around 10 kPa)",
+        description="equibiaxial in-plane pre-stretch lambda0 of both layers",
+    ),
+}
+
+
+def registry_from_config(causes: dict) -> dict:
+    """``{name: Cause}`` from the ``diagnosis.causes`` mapping of the configuration.
+
+    Every entry needs ``keyword``, ``symbol``, ``unit``, ``neutral`` and ``nodes``
+    (``modulus`` defaults to False).  Node lists may use the axis forms of the
+    configuration (see :func:`skinsuction.space.expand_axis`).
+    """
+    from skinsuction.space import expand_axis
+
+    out = {}
+    for name, spec in (causes or {}).items():
+        spec = dict(spec)
+        try:
+            spec["nodes"] = sorted(expand_axis(spec["nodes"]))
+            out[name] = Cause(name=name, **{k: v for k, v in spec.items()
+                                            if k in Cause.__dataclass_fields__})
+        except (KeyError, TypeError, ValueError) as err:
+            raise ValueError(f"diagnosis.causes.{name}: {err}") from None
+    return out
+
+
+def default_registry() -> dict:
+    """The built-in registry (:data:`DEFAULT_CAUSES`)."""
+    return registry_from_config(DEFAULT_CAUSES)

@@ -1,0 +1,128 @@
+"""``skinsuction diagnose``: arguments and run, for the CLI's command registry.
+
+::
+
+    skinsuction diagnose MEASURED.csv --out DIR [--space-dir results/diagnosis/spaces]
+        [--noise-um SD] [--alpha 0.01] [--delta-bic -10] [--seed 0] [--repeats 2]
+
+Bad input (file, spaces) raises ``ValueError`` subclasses with one-line messages
+(:class:`skinsuction.measured.MeasuredDataError`,
+:class:`skinsuction.identify.measured_fit.InputError`), which the CLI prints
+with exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from ._diagnose import DEFAULT_SPACE_DIR, Settings
+
+__all__ = ["add_arguments", "command"]
+
+
+def _positive(text):
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
+    return v
+
+
+def _non_negative(text):
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(v) and v >= 0):
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    return v
+
+
+def _level(text):
+    v = _positive(text)
+    if not v < 1:
+        raise argparse.ArgumentTypeError(f"must lie in (0, 1), got {text}")
+    return v
+
+
+def _negative(text):
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(v) and v < 0):
+        raise argparse.ArgumentTypeError(f"must be negative, got {text}")
+    return v
+
+
+def _count(text):
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {text}")
+    return v
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments of ``skinsuction diagnose``."""
+    d = Settings()
+    p.add_argument("measured", metavar="MEASURED.csv",
+                   help="measured curves, the format of `skinsuction identify`: columns "
+                        "probe_mm, pressure_mbar, deflection_mm and optionally curve "
+                        "(replicate id); one or both probes (2 and 6 mm)")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder: report.json, report.md, fit.png/pdf, "
+                        "residuals.png/pdf, gain.png/pdf")
+    p.add_argument("--space-dir", default=DEFAULT_SPACE_DIR, metavar="DIR",
+                   help="folder of the ray spaces built by the workflow "
+                        f"(neo_hookean.parquet and one file per cause; default {DEFAULT_SPACE_DIR}; "
+                        "build with `snakemake --cores 2 diagnosis_spaces`)")
+    p.add_argument("--noise-um", type=_positive, default=None, metavar="UM",
+                   help="noise sd of one measured deflection in µm, if known (default: "
+                        "estimated from replicate curves, or from the curves' differences)")
+    p.add_argument("--alpha", type=_level, default=d.alpha,
+                   help=f"level of the systematic-misfit test (default {d.alpha:g})")
+    p.add_argument("--delta-bic", type=_negative, default=d.delta_bic, metavar="DB",
+                   help="BIC difference a cause must reach to earn its extra parameter "
+                        f"(default {d.delta_bic:g}: very strong evidence)")
+    p.add_argument("--model-error-um", type=_non_negative, default=d.model_error_um,
+                   metavar="UM", help="accuracy of the simulated spaces in µm, added in "
+                                      f"quadrature to the noise (default {d.model_error_um:g})")
+    p.add_argument("--repeats", type=_count, default=d.repeats,
+                   help=f"window focusing runs per fit (default {d.repeats})")
+    p.add_argument("--seed", type=int, default=d.seed,
+                   help="random seed; the same seed gives the same report (default 0)")
+    p.add_argument("--no-holdout", action="store_true",
+                   help="skip the cross-probe holdout (faster)")
+
+
+def command(args: argparse.Namespace) -> int:
+    """Run ``skinsuction diagnose``; returns the exit code (0)."""
+    from skinsuction.identify.measured_fit import InputError
+
+    from ._diagnose import diagnose_file
+    from ._rays import SpaceMissingError
+    from ._report import write_report
+
+    settings = Settings(alpha=args.alpha, delta_bic=args.delta_bic, noise_um=args.noise_um,
+                        model_error_um=args.model_error_um, repeats=args.repeats,
+                        seed=args.seed, holdout=not args.no_holdout)
+    try:
+        report = diagnose_file(args.measured, args.space_dir, settings)
+    except SpaceMissingError as err:
+        raise InputError(str(err)) from None
+    try:
+        paths = write_report(report, args.out)
+    except OSError as err:
+        raise InputError(f"{args.out}: cannot write ({err.strerror or err})") from None
+    print(report["summary"])
+    print(f"baseline: {report['baseline']['description']}")
+    print(f"wrote {', '.join(str(p) for p in paths.values())}")
+    sys.stdout.flush()
+    return 0

@@ -1,0 +1,423 @@
+"""The diagnosis of measured suction curves: fit, misfit, candidates, verdict, report.
+
+:func:`diagnose` runs the five steps of ``skinsuction diagnose`` on loaded data
+and the ray spaces; :func:`diagnose_file` reads the CSV and the spaces first;
+:func:`write_report` writes ``report.json``, ``report.md`` and the figures.
+
+Decision rule (settings in :class:`Settings`, defaults from
+``diagnosis.decision`` of the configuration):
+
+1. the baseline (neo-Hookean) fit has a *systematic misfit*: the smooth-pattern
+   test of its residuals rejects pure noise at level ``alpha`` (0.01);
+2. a candidate *earns its extra parameter* if ``delta_BIC <= delta_bic``
+   (-10: "very strong" evidence on the scale of Kass and Raftery, 1995; with
+   ln n ~ 4.6 for 100 points this asks the extra parameter to lower chi^2 by
+   more than 14.6, which pure noise does with probability ~1e-4) **and** its
+   own residuals pass the smooth-pattern test (it removes the misfit);
+3. the cause is the candidate of lowest BIC among those; ``none`` otherwise.
+   With a misfit that no candidate removes the verdict is ``none`` with
+   ``verdict = "unexplained_misfit"``.
+
+The cross-probe holdout (fit on one probe, predict the other) is measured and
+reported for every model when both probes are present; it is not part of the
+rule (a single probe does not pin down three parameters, so the prediction of
+the other probe can fail for the extended and the baseline model alike), but
+``gain.holdout_ratio < 1`` is what a user should see for a real effect.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ._causes import BASELINE, NONE
+from ._fit import PAPER_WF, FitData, fit_model
+from ._stats import (
+    NoiseEstimate,
+    bic,
+    describe_residuals,
+    misfit_test,
+    noise_from_differences,
+    noise_from_replicates,
+)
+
+__all__ = ["Settings", "diagnose", "diagnose_file", "prepare_data", "DEFAULT_SPACE_DIR"]
+
+#: Where the workflow writes the ray spaces (``--space-dir`` default).
+DEFAULT_SPACE_DIR = "results/diagnosis/spaces"
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Settings of a diagnosis (see the module docstring for the decision rule).
+
+    Attributes
+    ----------
+    alpha : float
+        Level of the smooth-pattern (systematic misfit) test.
+    delta_bic : float
+        A candidate's BIC must be at least this much below the baseline's (< 0).
+    degree : int
+        Highest Legendre degree of the smooth pattern per probe.
+    model_error_um : float
+        Accuracy of the simulated spaces (interpolation of the rays, µm), added in
+        quadrature to the noise of each fitted point, so that data with almost no
+        noise are not judged against an accuracy the spaces do not have.
+    noise_um : float or None
+        Noise sd of one measured deflection if known (µm); estimated otherwise.
+    repeats : int
+        Window focusing runs per fit (the best is polished).
+    holdout : bool
+        Cross-probe holdout when both probes are present.
+    ambiguity_bic : float
+        Eligible candidates whose BIC is within this of the chosen one's are reported
+        as ``ambiguous_with`` (6: the "strong evidence" step of Kass and Raftery).
+    seed : int
+    window_focusing : dict
+        N, Nb, C, max_iter.
+    """
+
+    alpha: float = 0.01
+    delta_bic: float = -10.0
+    degree: int = 4
+    model_error_um: float = 0.3
+    noise_um: float | None = None
+    repeats: int = 2
+    holdout: bool = True
+    ambiguity_bic: float = 6.0
+    seed: int = 0
+    window_focusing: dict = field(default_factory=lambda: dict(PAPER_WF))
+
+    def __post_init__(self):
+        if not 0 < self.alpha < 1:
+            raise ValueError(f"alpha must lie in (0, 1), got {self.alpha}")
+        if not self.delta_bic < 0:
+            raise ValueError(f"delta_bic must be negative, got {self.delta_bic}")
+        if self.noise_um is not None and not self.noise_um > 0:
+            raise ValueError(f"noise_um must be positive, got {self.noise_um}")
+        if self.model_error_um < 0:
+            raise ValueError("model_error_um must be >= 0")
+
+    @classmethod
+    def from_config(cls, decision: dict | None = None, fit: dict | None = None, **kw):
+        d = dict(decision or {})
+        f = dict(fit or {})
+        wf = {**PAPER_WF, **(f.pop("window_focusing", None) or {})}
+        allowed = cls.__dataclass_fields__
+        return cls(**{k: v for k, v in {**d, **f, **kw}.items() if k in allowed},
+                   window_focusing=wf)
+
+
+# --------------------------------------------------------------------- the data
+def prepare_data(data, probes, settings: Settings):
+    """Fitted points per probe and the noise estimate.
+
+    Replicate curves of a probe at the same pressures are averaged (the noise of
+    the mean is sd / sqrt(R)); replicates at different pressures are fitted
+    point by point.  Points at p = 0 are not fitted (every model gives M(0) = 0;
+    a Cutometer zeroes there).
+    """
+    fitted, groups, singles, info = {}, [], [], {}
+    for probe in probes:
+        curves = data.for_probe(probe)
+        if not curves:
+            continue
+        ps = [c.pressure_mbar for c in curves]
+        aligned = len(curves) > 1 and all(
+            p.shape == ps[0].shape and np.allclose(p, ps[0]) for p in ps)
+        keep = [p > 0 for p in ps]
+        for c, k in zip(curves, keep):
+            singles.append((c.pressure_mbar[k], c.deflection_mm[k]))
+        if aligned:
+            y = np.array([c.deflection_mm[keep[0]] for c in curves])
+            groups.append(y)
+            p, m, n_rep = ps[0][keep[0]], y.mean(axis=0), len(curves)
+        else:
+            p = np.concatenate([c.pressure_mbar[k] for c, k in zip(curves, keep)])
+            m = np.concatenate([c.deflection_mm[k] for c, k in zip(curves, keep)])
+            order = np.argsort(p, kind="stable")
+            p, m, n_rep = p[order], m[order], 1
+        fitted[float(probe)] = (p, m, n_rep, tuple(c.curve for c in curves))
+        info[f"{probe:g}"] = {"curves": [c.curve for c in curves], "replicates": len(curves),
+                              "averaged": bool(aligned), "points_fitted": int(p.size)}
+    if not fitted:
+        raise ValueError("no curve of a probe the spaces cover")
+    if settings.noise_um is not None:
+        noise = NoiseEstimate(float(settings.noise_um), "given", math.inf, {})
+    elif groups:
+        noise = noise_from_replicates(groups)
+    else:
+        noise = noise_from_differences(singles)
+    out = {}
+    for probe, (p, m, n_rep, ids) in fitted.items():
+        sd = math.sqrt(noise.sd_um ** 2 / n_rep + settings.model_error_um ** 2)
+        out[probe] = FitData(probe, p, m, sd, ids)
+    return out, noise, info
+
+
+# --------------------------------------------------------------------- diagnose
+def _residual_dict(fit, data):
+    return {p: (data[p].pressure_mbar, fit.residual_um[p]) for p in data}
+
+
+def _fit_json(fit, test=None):
+    return {
+        "parameters": fit.parameters,
+        "E_um": fit.E_um,
+        "rms_um": fit.rms_um,
+        "chi2": fit.chi2,
+        "n_points": fit.n_points,
+        "n_params": fit.n_params,
+        "fitted_mm": {f"{p:g}": _finite(c) for p, c in fit.fitted_mm.items()},
+        "residual_um": {f"{p:g}": _finite(c) for p, c in fit.residual_um.items()},
+        "misfit_test": test.to_dict() if test is not None else None,
+        "optimiser": fit.wf,
+    }
+
+
+def _finite(a):
+    return [float(x) if np.isfinite(x) else None for x in np.asarray(a, dtype=float)]
+
+
+def _holdout(space, data, settings, seed):
+    """Fit on one probe alone, predict the other.
+
+    Returns (E of the holdout in µm, detail).  The holdout E is that of the
+    smaller probe predicted from a fit of the larger one (6 -> 2 mm): the paper
+    (section 3.2, Figure 4) shows that the 6 mm probe identifies both layers and
+    the 2 mm probe alone cannot identify X1h, so the other direction fails for
+    every model; it is reported in the detail.
+    """
+    from ._fit import ModelCurves
+
+    probes = sorted(data)
+    small, large = probes[0], probes[-1]
+    detail, main = {}, None
+    for train, test in ((large, small), (small, large)):
+        f = fit_model(space, {train: data[train]}, seed=seed, repeats=1,
+                      window_focusing_options=settings.window_focusing)
+        pred = ModelCurves(space, {test: data[test]})(f.theta[None, :])[test][0]
+        e = 1e3 * (data[test].deflection_mm - pred)
+        s = float((e ** 2).sum())
+        ok = math.isfinite(s)
+        d = {"parameters": f.parameters, "E_um": math.sqrt(s) / e.size if ok else None,
+             "rms_um": math.sqrt(s / e.size) if ok else None}
+        detail[f"fit_{train:g}_predict_{test:g}"] = d
+        if main is None:
+            main = d["E_um"]
+    return main, detail
+
+
+def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=None) -> dict:
+    """Diagnose loaded measured data (:class:`skinsuction.measured.MeasuredData`).
+
+    Parameters
+    ----------
+    data : MeasuredData
+    spaces : dict name -> RaySpace
+        ``neo_hookean`` and the candidate causes (see :func:`read_ray_spaces`).
+    settings : Settings
+    source : dict, optional
+        ``{"file": ..., "sha256": ...}`` of the input file for the report.
+
+    Returns
+    -------
+    dict
+        The report (see the package docstring for its contract).
+    """
+    t0 = time.perf_counter()
+    settings = settings or Settings()
+    base_space = spaces[BASELINE]
+    probes = [p for p in data.probes if base_space.has_probe(p)]
+    skipped = [p for p in data.probes if not base_space.has_probe(p)]
+    fd, noise, data_info = prepare_data(data, probes, settings)
+    probes = sorted(fd)
+    root = np.random.SeedSequence(settings.seed)
+    seeds = iter(root.spawn(64))
+    sigma = {p: fd[p].sigma_um for p in probes}
+    n_points = sum(d.n for d in fd.values())
+
+    # 1. baseline
+    base = fit_model(base_space, fd, seed=next(seeds), repeats=settings.repeats,
+                     window_focusing_options=settings.window_focusing)
+    base_test = misfit_test(_residual_dict(base, fd), sigma, noise.dof, settings.degree,
+                            settings.alpha)
+    base_bic = bic(base.chi2, base.n_params, n_points)
+    two_probes = len(probes) >= 2 and settings.holdout
+    base_hold, base_hold_detail = (_holdout(base_space, fd, settings, next(seeds))
+                                   if two_probes else (None, None))
+
+    # 2. candidates
+    candidates, fits, tests = [], {}, {}
+    for name, space in spaces.items():
+        if name == BASELINE:
+            continue
+        if not all(space.has_probe(p) for p in probes):
+            continue
+        cause = space.cause
+        null_theta = np.array([*base.theta, cause.neutral])
+        f = fit_model(space, fd, seed=next(seeds), repeats=settings.repeats,
+                      window_focusing_options=settings.window_focusing, starts=[null_theta])
+        t = misfit_test(_residual_dict(f, fd), sigma, noise.dof, settings.degree,
+                        settings.alpha)
+        b = bic(f.chi2, f.n_params, n_points)
+        hold, hold_detail = (_holdout(space, fd, settings, next(seeds))
+                             if two_probes else (None, None))
+        fits[name], tests[name] = f, t
+        candidates.append({
+            "cause": name,
+            "hypothesis": cause.hypothesis,
+            "parameters": f.parameters,
+            "E_um": f.E_um,
+            "delta_bic": b - base_bic,
+            "holdout_E_um": hold,
+            "E_ratio": f.E_um / base.E_um if base.E_um > 0 else None,
+            "holdout_ratio": (hold / base_hold) if hold is not None and base_hold else None,
+            "delta_chi2": f.chi2 - base.chi2,
+            "bic": b,
+            "systematic_misfit": t.significant,
+            "misfit_p_value": t.p_value,
+            "decisive": bool(b - base_bic <= settings.delta_bic),
+            "removes_misfit": not t.significant,
+            "extra_parameter": {"symbol": cause.symbol, "unit": cause.unit,
+                                "value": f.parameters[cause.symbol],
+                                "coordinate": float(f.theta[2]),
+                                "coordinate_name": cause.coordinate_name,
+                                "range": [cause.lower, cause.upper],
+                                "at_bound": bool(np.isclose(f.theta[2], cause.lower)
+                                                 or np.isclose(f.theta[2], cause.upper))},
+            "fit": _fit_json(f, t),
+            "holdout": hold_detail,
+        })
+
+    # 3. verdict
+    eligible = [c for c in candidates if c["decisive"] and c["removes_misfit"]]
+    if base_test.significant and eligible:
+        best = min(eligible, key=lambda c: c["bic"])
+        cause, verdict = best["cause"], "cause_found"
+    else:
+        best, cause = None, NONE
+        verdict = "unexplained_misfit" if base_test.significant else "neo_hookean_fits"
+    ranked = sorted(candidates, key=lambda c: c["bic"])
+    runner_up = next((c for c in ranked if best is not None and c is not best), None)
+    # candidates that explain the data about as well as the chosen one
+    ambiguous = ([c["cause"] for c in eligible if c is not best
+                  and c["bic"] - best["bic"] < settings.ambiguity_bic] if best else [])
+
+    description = describe_residuals(base_test, _residual_dict(base, fd), sigma)
+    report = {
+        "input": {**(source or {}), "probes_mm": [float(p) for p in probes],
+                  "probes_skipped_mm": [float(p) for p in skipped],
+                  "metadata": dict(getattr(data, "metadata", {}) or {}),
+                  "curves": data_info},
+        "noise_um": noise.sd_um,
+        "noise": {**noise.to_dict(),
+                  "sigma_fitted_um": {f"{p:g}": sigma[p] for p in probes},
+                  "model_error_um": settings.model_error_um},
+        "baseline": {
+            "model": BASELINE,
+            "parameters": base.parameters,
+            "E_um": base.E_um,
+            "systematic_misfit": base_test.significant,
+            "description": description,
+            "bic": base_bic,
+            "holdout_E_um": base_hold,
+            "holdout": base_hold_detail,
+            **{k: v for k, v in _fit_json(base, base_test).items() if k != "parameters"},
+        },
+        "data": {f"{p:g}": {"pressure_mbar": fd[p].pressure_mbar.tolist(),
+                            "measured_mm": fd[p].deflection_mm.tolist(),
+                            "sigma_um": fd[p].sigma_um} for p in probes},
+        "candidates": candidates,
+        "cause": cause,
+        "verdict": verdict,
+        "extended": ({"cause": best["cause"], "parameters": best["parameters"],
+                      "E_um": best["E_um"]} if best else None),
+        "gain": ({"E_ratio": best["E_ratio"], "delta_bic": best["delta_bic"],
+                  "holdout_ratio": best["holdout_ratio"]} if best else None),
+        "runner_up": ({"cause": runner_up["cause"],
+                       "bic_above_chosen": runner_up["bic"] - best["bic"]}
+                      if runner_up else None),
+        "ambiguous_with": ambiguous,
+        "summary": None,
+        "settings": {**asdict(settings), "n_points": n_points},
+        "spaces": {name: {"x1d_range_mpa": list(s.spec.x1d_range),
+                          "x1h_over_x1d_range": [s.spec.ratio_nodes[0], s.spec.ratio_nodes[-1]],
+                          "coordinate_range": ([s.cause.lower, s.cause.upper]
+                                               if s.cause else None),
+                          "mesh": s.spec.mesh, "git_commit": (s.metadata.get("git") or {})
+                          .get("commit")} for name, s in spaces.items()},
+        "seconds": None,
+    }
+    report["summary"] = summary_text(report)
+    report["seconds"] = time.perf_counter() - t0
+    from skinsuction import __version__
+
+    report["skinsuction_version"] = __version__
+    report["created_utc"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    return report
+
+
+def _params_text(params):
+    out = []
+    for k, v in params.items():
+        unit = {"X1d": "MPa", "X1h": "MPa", "X2d": "MPa", "X2h": "MPa", "t_d": "mm"}.get(k, "")
+        out.append(f"{k} = {v:.3g}{' ' + unit if unit else ''}")
+    return ", ".join(out)
+
+
+def summary_text(report: dict) -> str:
+    """The verdict in two or three plain sentences."""
+    b = report["baseline"]
+    s = (f"Neo-Hookean fit: {_params_text(b['parameters'])}, E = {b['E_um']:.3g} µm "
+         f"(noise {report['noise_um']:.2g} µm per point, {report['noise']['method']}). ")
+    if report["cause"] == NONE:
+        if report["verdict"] == "unexplained_misfit":
+            s += ("The neo-Hookean model misses a systematic pattern, but no candidate cause "
+                  "removes it while earning its extra parameter: cause none "
+                  "(misfit unexplained by the causes tried).")
+        else:
+            s += ("The residuals are consistent with the noise; no candidate earns its extra "
+                  "parameter: cause none.")
+        return s
+    c = next(c for c in report["candidates"] if c["cause"] == report["cause"])
+    g = report["gain"]
+    s += (f"Cause: {c['cause']} ({c['hypothesis']}). Extended fit: "
+          f"{_params_text(c['parameters'])}, E = {c['E_um']:.3g} µm "
+          f"(E ratio {g['E_ratio']:.2f}, delta BIC {g['delta_bic']:.1f}")
+    if g["holdout_ratio"] is not None:
+        s += f", cross-probe holdout E ratio {g['holdout_ratio']:.2f}"
+    s += "); its residuals are consistent with the noise."
+    if report.get("ambiguous_with"):
+        s += (f" But {', '.join(report['ambiguous_with'])} explains the data almost as well "
+              f"(BIC within {report['settings']['ambiguity_bic']:g}): these causes cannot be "
+              "told apart from these curves; an independent measurement (e.g. the dermis "
+              "thickness by ultrasound) would decide.")
+    elif report.get("runner_up"):
+        r = report["runner_up"]
+        s += f" Next best: {r['cause']} (BIC {r['bic_above_chosen']:.1f} higher)."
+    return s
+
+
+def diagnose_file(measured_path, space_dir=DEFAULT_SPACE_DIR, settings: Settings | None = None,
+                  spaces: dict | None = None) -> dict:
+    """Read a measured CSV (as ``skinsuction identify`` does) and diagnose it."""
+    from skinsuction.identify.measured_fit import file_sha256
+    from skinsuction.measured import load_measured
+
+    from ._rays import read_ray_spaces
+
+    if spaces is None:
+        spaces = read_ray_spaces(space_dir)
+    base = spaces[BASELINE]
+    p_hi = base.spec.pressures_mbar[-1]
+    data = load_measured(measured_path, available_probes=list(base.probes_mm),
+                         pressure_range_mbar=(0.0, p_hi))
+    source = {"file": str(measured_path), "sha256": file_sha256(measured_path),
+              "space_dir": str(space_dir) if space_dir is not None else None}
+    return diagnose(data, spaces, settings, source=source)

@@ -1,0 +1,197 @@
+"""Fit a model (neo-Hookean or one cause) on its ray space: window focusing, then polish.
+
+The parameters searched are ``theta = (log10 X1d, log10 r[, c])`` with
+``r = X1h / X1d`` and ``c`` the ray coordinate of the cause (see
+:mod:`._rays`): the window focusing of the paper (section 2.4, N = 1000,
+Nb = 20) samples uniformly in the box of the space, which in logarithms covers
+decades of moduli evenly.  The cost is ``chi^2 / 2`` with the noise level of
+each point, so both probes weigh by their noise.  The best of ``repeats``
+window focusing runs (independent seeds) is then polished by a bounded
+least-squares (trust region), so that the chi^2 that the BIC compares is the
+minimum and not the stochastic stop of the window focusing.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from skinsuction.identify import IdentificationError, window_focusing
+
+from ._rays import RayInterpolant, RaySpace
+
+__all__ = ["FitData", "Fit", "ModelCurves", "fit_model", "PAPER_WF"]
+
+#: Window focusing settings of the paper (section 2.4); C in units of sqrt(chi^2/n).
+PAPER_WF = {"n_samples": 1000, "n_best": 20, "tolerance": 1e-6, "max_iter": 200}
+
+
+@dataclass(frozen=True)
+class FitData:
+    """The points fitted for one probe: pressures (mbar), deflections (mm), noise sd (µm)."""
+
+    probe_mm: float
+    pressure_mbar: np.ndarray
+    deflection_mm: np.ndarray
+    sigma_um: float
+    curve_ids: tuple = ()
+
+    @property
+    def n(self) -> int:
+        return int(self.pressure_mbar.size)
+
+
+class ModelCurves:
+    """Curves of one model at the measured pressures of several probes."""
+
+    def __init__(self, space: RaySpace, data: dict):
+        self.space = space
+        self.data = data
+        self.interp = {p: RayInterpolant(space, p, d.pressure_mbar) for p, d in data.items()}
+        first = next(iter(self.interp.values()))
+        self.lower, self.upper, self.d = first.lower, first.upper, first.d
+
+    def __call__(self, theta) -> dict:
+        return {p: f(theta) for p, f in self.interp.items()}
+
+    def parameters(self, theta) -> dict:
+        """Physical parameters (MPa, mm, 1) of one theta."""
+        x1d = 10.0 ** theta[0]
+        out = {"X1d": float(x1d), "X1h": float(x1d * 10.0 ** theta[1])}
+        cause = self.space.cause
+        if cause is not None:
+            out[cause.symbol] = float(cause.value(theta[2], x1d))
+        return out
+
+
+class _Objective:
+    """chi^2 / 2 for window focusing (vectorised) and residuals for least squares."""
+
+    error_unit = "1"
+
+    def __init__(self, model: ModelCurves):
+        self.model = model
+        self.lower, self.upper = model.lower, model.upper
+        self.n = sum(d.n for d in model.data.values())
+
+    def __call__(self, theta) -> np.ndarray:
+        chi2 = 0.0
+        for p, m in self.model(theta).items():
+            d = self.model.data[p]
+            r = (d.deflection_mm[None, :] - m) * (1e3 / d.sigma_um)
+            chi2 = chi2 + np.einsum("nt,nt->n", r, r)
+        cost = 0.5 * np.asarray(chi2, dtype=float)
+        cost[~np.isfinite(cost)] = np.inf
+        return cost
+
+    def error(self, cost) -> float:
+        return math.sqrt(2.0 * cost / self.n)  # RMS of the normalised residuals
+
+    def residuals(self, theta) -> np.ndarray:
+        out = []
+        for p, m in self.model(np.asarray(theta, dtype=float)[None, :]).items():
+            d = self.model.data[p]
+            out.append((d.deflection_mm - m[0]) * (1e3 / d.sigma_um))
+        r = np.concatenate(out)
+        return np.where(np.isfinite(r), r, 1e6)
+
+
+@dataclass
+class Fit:
+    """A fitted model."""
+
+    model: str
+    theta: np.ndarray
+    parameters: dict
+    chi2: float
+    n_points: int
+    n_params: int
+    E_um: float  # eq. 7 on the concatenated residuals of the fitted probes
+    rms_um: float
+    fitted_mm: dict  # probe -> (u,)
+    residual_um: dict  # probe -> (u,)
+    wf: dict = field(default_factory=dict)
+
+    @property
+    def finite(self) -> bool:
+        return math.isfinite(self.chi2)
+
+
+def _curves_at(model: ModelCurves, theta):
+    return {p: c[0] for p, c in model(np.asarray(theta)[None, :]).items()}
+
+
+def evaluate_fit(model: ModelCurves, theta, name: str, wf=None) -> Fit:
+    """A :class:`Fit` at a given theta (chi^2, E, residuals)."""
+    curves = _curves_at(model, theta)
+    chi2, sq, n = 0.0, 0.0, 0
+    res = {}
+    for p, c in curves.items():
+        d = model.data[p]
+        e = 1e3 * (d.deflection_mm - c)
+        res[p] = e
+        chi2 += float(((e / d.sigma_um) ** 2).sum())
+        sq += float((e ** 2).sum())
+        n += d.n
+    if not math.isfinite(chi2):
+        chi2 = sq = math.inf
+    return Fit(name, np.asarray(theta, dtype=float), model.parameters(theta), chi2, n,
+               model.d, math.sqrt(sq) / n, math.sqrt(sq / n), curves, res, dict(wf or {}))
+
+
+def fit_model(space: RaySpace, data: dict, *, seed=0, repeats: int = 2,
+              window_focusing_options: dict | None = None, polish: bool = True,
+              starts=()) -> Fit:
+    """Fit the model of ``space`` to ``data`` ({probe: FitData}).
+
+    ``repeats`` window focusing runs with seeds spawned from ``seed``; the best
+    one (and any of ``starts``, thetas e.g. of a nested model) is polished by
+    bounded least squares.  Raises :class:`IdentificationError` if no candidate
+    of the space gives a finite cost.
+    """
+    model = ModelCurves(space, data)
+    obj = _Objective(model)
+    wf = {**PAPER_WF, **(window_focusing_options or {})}
+    root = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+    runs = []
+    for s in root.spawn(int(repeats)):
+        try:
+            runs.append(window_focusing(obj, seed=s, **wf))
+        except IdentificationError:
+            continue
+    cands = [r.estimate for r in runs]
+    for s in starts:
+        s = np.asarray(s, dtype=float)
+        if s.size == model.d and np.isfinite(obj(s[None, :])[0]):
+            cands.append(s)
+    if not cands:
+        raise IdentificationError(f"{space.name}: no parameters of the space reproduce the "
+                                  "measured pressures (all candidates non-converged)")
+    costs = [float(obj(np.asarray(c)[None, :])[0]) for c in cands]
+    order = np.argsort(costs)
+    best, best_cost = np.asarray(cands[order[0]]), costs[order[0]]
+    n_polished = 0
+    if polish:
+        lo, hi = obj.lower, obj.upper
+        # the best window-focusing result, and the best start if it is a different point
+        for i in order[: 2]:
+            x0 = np.clip(np.asarray(cands[i], dtype=float), lo, hi)
+            try:
+                sol = least_squares(obj.residuals, x0, bounds=(lo, hi), method="trf",
+                                    x_scale=np.maximum(hi - lo, 1e-12) * 0.05,
+                                    diff_step=1e-7, xtol=1e-12, ftol=1e-12, gtol=1e-12,
+                                    max_nfev=200)
+            except ValueError:
+                continue
+            n_polished += 1
+            c = float(obj(sol.x[None, :])[0])
+            if c < best_cost:
+                best, best_cost = sol.x, c
+    info = {"runs": len(runs), "iterations": [int(r.iterations) for r in runs],
+            "converged": [bool(r.converged) for r in runs],
+            "chi2_runs": [2 * float(c) for c in costs[: len(runs)]],
+            "polished": n_polished, "settings": wf, "repeats": int(repeats)}
+    return evaluate_fit(model, best, space.name, info)

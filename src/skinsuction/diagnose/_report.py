@@ -1,0 +1,134 @@
+"""Write a diagnosis: ``report.json``, ``report.md`` and its figures."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+__all__ = ["write_report", "report_markdown"]
+
+
+def _strict(obj):
+    """JSON without NaN/inf (they become null) and with plain Python numbers."""
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {str(k): _strict(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_strict(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        x = float(obj)
+        return x if math.isfinite(x) else None
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.ndarray):
+        return _strict(obj.tolist())
+    return obj
+
+
+def _num(x, fmt=".3g"):
+    return "n/a" if x is None else format(x, fmt)
+
+
+def _params(p):
+    return ", ".join(f"{k} = {v:.4g}" for k, v in p.items())
+
+
+def report_markdown(report: dict, figures=None) -> str:
+    """The report as Markdown."""
+    b = report["baseline"]
+    lines = [
+        f"# Diagnosis of {Path(report['input'].get('file') or 'the measured curves').name}",
+        "",
+        f"**Cause: `{report['cause']}`** ({report['verdict'].replace('_', ' ')})",
+        "",
+        report["summary"],
+        "",
+        "## Input",
+        "",
+        f"- file: `{report['input'].get('file')}` (SHA-256 `{report['input'].get('sha256')}`)",
+        f"- probes: {', '.join(f'{p:g} mm' for p in report['input']['probes_mm'])}",
+        f"- noise: {report['noise_um']:.3g} µm per deflection ({report['noise']['method']}"
+        + (f", {report['noise']['dof']:.0f} degrees of freedom" if report["noise"].get("dof")
+           else "") + f"); accuracy of the spaces {report['noise']['model_error_um']:g} µm "
+        "added in quadrature",
+        "",
+        "## Neo-Hookean fit (baseline)",
+        "",
+        f"- {_params(b['parameters'])} (MPa)",
+        f"- E = {b['E_um']:.3g} µm (eq. 7), RMS residual {b['rms_um']:.3g} µm, "
+        f"chi² = {b['chi2']:.1f} for {b['n_points']} points",
+        f"- systematic misfit: **{'yes' if b['systematic_misfit'] else 'no'}** "
+        f"(smooth-pattern test p = {b['misfit_test']['p_value']:.2g}, level "
+        f"{b['misfit_test']['alpha']:g})",
+        f"- {b['description']}",
+        "",
+        "## Candidate causes",
+        "",
+        "| cause | extra parameter | E (µm) | E ratio | ΔBIC | misfit left (p) | "
+        "holdout E (µm) | holdout ratio | verdict |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for c in sorted(report["candidates"], key=lambda c: c["bic"]):
+        x = c["extra_parameter"]
+        unit = "" if x["unit"] == "1" else f" {x['unit']}"
+        flag = ("chosen" if c["cause"] == report["cause"] else
+                "decisive, but misfit left" if c["decisive"] and not c["removes_misfit"] else
+                "not decisive")
+        bound = " (at bound)" if x["at_bound"] else ""
+        lines.append(
+            f"| {c['cause']} | {x['symbol']} = {x['value']:.3g}{unit}{bound} | {c['E_um']:.3g} | "
+            f"{_num(c['E_ratio'], '.2f')} | {c['delta_bic']:.1f} | "
+            f"{'yes' if c['systematic_misfit'] else 'no'} ({c['misfit_p_value']:.2g}) | "
+            f"{_num(c['holdout_E_um'])} | {_num(c['holdout_ratio'], '.2f')} | {flag} |")
+    lines += [
+        "",
+        f"Baseline cross-probe holdout E: {_num(b.get('holdout_E_um'))} µm.",
+        "",
+        "Rule: a cause is named if the neo-Hookean residuals carry a systematic pattern, "
+        f"its ΔBIC ≤ {report['settings']['delta_bic']:g} and its own residuals pass the "
+        "pattern test; among those the lowest BIC wins.",
+        "",
+    ]
+    if figures:
+        lines += ["## Figures", ""]
+        for name, path in figures.items():
+            lines.append(f"![{name}]({Path(path).name})")
+        lines.append("")
+    lines.append(f"Run time {report['seconds']:.1f} s; skinsuction {report.get('skinsuction_version')}.")
+    return "\n".join(lines) + "\n"
+
+
+def write_report(report: dict, out_dir, figures: bool = True) -> dict:
+    """Write ``report.json``, ``report.md`` and (optionally) the figures into ``out_dir``.
+
+    Returns ``{name: path}``.
+    """
+    from skinsuction.space import atomic_output
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"json": out / "report.json", "md": out / "report.md"}
+    figs = {}
+    if figures:
+        import matplotlib.pyplot as plt
+
+        from skinsuction.figures import _style
+        from skinsuction.figures.diagnosis import plot_fit, plot_gain, plot_residuals
+
+        for name, fn in (("fit", plot_fit), ("residuals", plot_residuals), ("gain", plot_gain)):
+            fig = fn(report)
+            png, pdf = out / f"{name}.png", out / f"{name}.pdf"
+            _style.save(fig, png, pdf)
+            plt.close(fig)
+            figs[name] = png
+            paths[f"{name}_png"], paths[f"{name}_pdf"] = png, pdf
+    with atomic_output(paths["json"]) as tmp:
+        tmp.write_text(json.dumps(_strict(report), indent=1, ensure_ascii=False) + "\n",
+                       encoding="utf-8")
+    with atomic_output(paths["md"]) as tmp:
+        tmp.write_text(report_markdown(report, figs), encoding="utf-8")
+    return paths

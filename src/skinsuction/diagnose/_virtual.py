@@ -1,0 +1,130 @@
+"""Virtual experiments: FE suction curves with a hidden effect and measurement noise.
+
+Used for the shipped example (``data/example_suction_synthetic.csv``), the
+hidden-effect tests and the confusion-matrix benchmark.  Every curve is a
+direct FE run of :func:`skinsuction.model.simulate` (never read from a
+simulated space), with Gaussian noise on every deflection at p > 0 (the
+Cutometer zeroes at p = 0), drawn from a seed.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ._causes import NONE, Cause
+
+__all__ = ["VirtualExperiment", "virtual_experiment", "draw_experiment", "write_csv",
+           "DRAW_RANGES"]
+
+#: Ranges of the random draws of the tests and the benchmark (see draw_experiment).
+DRAW_RANGES = {
+    "x1d_mpa": (0.025, 0.08),
+    "x1h_over_x1d": (0.01, 0.3),
+    "noise_um": (1.0, 3.0),
+}
+
+
+@dataclass
+class VirtualExperiment:
+    """Parameters of a virtual experiment and its noisy curves."""
+
+    x1d: float
+    x1h: float
+    cause: str
+    value: float | None  # the hidden parameter (MPa, mm or 1); None for `none`
+    keyword: str | None
+    noise_um: float
+    seed: int
+    pressures_mbar: np.ndarray
+    probes_mm: tuple
+    mesh: dict
+    curves: dict = field(default_factory=dict)  # (probe, replicate) -> deflection (mm)
+    clean: dict = field(default_factory=dict)  # probe -> noise-free FE curve (mm)
+    converged: bool = True
+    replicates: int = 1
+
+    @property
+    def truth(self) -> dict:
+        out = {"cause": self.cause, "X1d": self.x1d, "X1h": self.x1h,
+               "noise_um": self.noise_um, "seed": self.seed}
+        if self.keyword:
+            out[self.keyword] = self.value
+        return out
+
+
+def virtual_experiment(x1d, x1h, cause: Cause | None = None, value=None, *, noise_um=2.0,
+                       seed=0, probes_mm=(2.0, 6.0), pressures_mbar=None, mesh=None,
+                       replicates: int = 1, bottom="fixed") -> VirtualExperiment:
+    """FE curves at (X1d, X1h) with the hidden effect ``cause = value``, plus noise.
+
+    ``value`` is in the unit of the cause's parameter (X2d in MPa, t_d in mm,
+    lambda0); ``cause=None`` is the neo-Hookean model.
+    """
+    from skinsuction.model import simulate
+
+    p = (np.arange(0.0, 101.0, 2.0) if pressures_mbar is None
+         else np.asarray(pressures_mbar, dtype=float))
+    kw = {} if cause is None else {cause.keyword: float(value)}
+    rng = np.random.default_rng(seed)
+    ve = VirtualExperiment(float(x1d), float(x1h), cause.name if cause else NONE,
+                           None if cause is None else float(value),
+                           None if cause is None else cause.symbol, float(noise_um), seed, p,
+                           tuple(float(q) for q in probes_mm), dict(mesh or {}),
+                           replicates=int(replicates))
+    for probe in ve.probes_mm:
+        c = simulate(x1d, x1h, probe_mm=probe, bottom=bottom, pressures_mbar=p,
+                     mesh=dict(mesh or {}), **kw)
+        ve.converged &= bool(c.converged)
+        ve.clean[probe] = c.deflection_mm
+        for r in range(ve.replicates):
+            m = c.deflection_mm + rng.normal(0.0, 1e-3 * noise_um, p.size)
+            m[p == 0] = 0.0
+            ve.curves[(probe, r)] = m
+    return ve
+
+
+def draw_experiment(seed, cause: Cause | None, *, effect_range=None, ranges=None, **kw):
+    """A virtual experiment with moduli, effect size and noise drawn from ``seed``.
+
+    X1d log-uniform in ``ranges["x1d_mpa"]``, X1h / X1d log-uniform in
+    ``ranges["x1h_over_x1d"]``, the noise uniform in ``ranges["noise_um"]`` and
+    the hidden coordinate of the cause uniform in ``effect_range`` (ray
+    coordinate: X2d / X1d, t_d or lambda0).
+    """
+    r = {**DRAW_RANGES, **(ranges or {})}
+    rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
+    x1d = math.exp(rng.uniform(*np.log(r["x1d_mpa"])))
+    ratio = math.exp(rng.uniform(*np.log(r["x1h_over_x1d"])))
+    noise = rng.uniform(*r["noise_um"])
+    value = None
+    if cause is not None:
+        coord = rng.uniform(*effect_range)
+        value = cause.value(coord, x1d)
+    return virtual_experiment(x1d, ratio * x1d, cause, value, noise_um=noise, seed=seed, **kw)
+
+
+def write_csv(ve: VirtualExperiment, path, header=()) -> Path:
+    """Write the experiment in the measured-CSV format, labelled as synthetic."""
+    from skinsuction.space import atomic_output
+
+    lines = ["# SYNTHETIC VIRTUAL EXPERIMENT, NOT A MEASUREMENT (skinsuction FE model + noise)",
+             *(f"# {h}" for h in header)]
+    truth = ve.truth
+    lines += [f"# true_cause: {truth['cause']}", f"# true_x1d_mpa: {ve.x1d:.6g}",
+              f"# true_x1h_mpa: {ve.x1h:.6g}"]
+    if ve.keyword:
+        lines.append(f"# true_{ve.keyword}: {ve.value:.6g}")
+    lines += [f"# noise_sd_um: {ve.noise_um:.6g}", f"# noise_seed: {ve.seed}",
+              f"# mesh: {ve.mesh}"]
+    rep = ve.replicates > 1
+    lines.append("probe_mm,pressure_mbar,deflection_mm" + (",curve" if rep else ""))
+    for (probe, r), m in sorted(ve.curves.items()):
+        for p, x in zip(ve.pressures_mbar, m):
+            lines.append(f"{probe:g},{p:g},{x:.5f}" + (f",R{r + 1}" if rep else ""))
+    with atomic_output(path) as tmp:
+        tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return Path(path)
