@@ -7,6 +7,7 @@
 #
 # config -> FE curves (one job per grid point) -> simulated spaces -> figures
 #        -> identifications (Figures 4, 4b, 7, 8, timing and optimiser tables)
+#        -> diagnoses of measured files (FE rays, ray spaces, reports, Figures 5, 6)
 
 
 configfile: "config/config.yaml"
@@ -23,6 +24,11 @@ if "identification" in config:
     include: "workflow/rules/identify.smk"
 
 
+if "diagnosis" in config:
+
+    include: "workflow/rules/diagnose.smk"
+
+
 
 report: "workflow/report/workflow.rst"
 
@@ -35,4 +41,5 @@ rule all:
     input:
         final_outputs(),
         IDENTIFICATION_OUTPUTS if "identification" in config else [],
+        DIAGNOSIS_OUTPUTS if "diagnosis" in config else [],
     default_target: True

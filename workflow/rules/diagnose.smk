@@ -1,0 +1,277 @@
+"""Diagnosis of measured curves (what the neo-Hookean model gets wrong, and why), Figures 5, 6.
+
+Included by the Snakefile when the configuration has a `diagnosis` section.
+
+config.diagnosis -> FE rays (one job per ray: results/diagnosis/rays/<ray>.parquet)
+  -> ray spaces (neo_hookean + one per cause: results/diagnosis/spaces/<model>.parquet)
+  -> one diagnosis per measured file (results/diagnosis/<name>/report.json, .md, figures)
+  -> direct FE runs at the diagnosed parameters (fe_check.csv) -> Figure 6
+measured file + the paper's space -> 100 neo-Hookean identifications -> Figure 5
+
+A ray is one FE curve at X1d = diagnosis.x1d_mpa.min; the scaling law
+M(s X1d, s X1h, s X2d, s p) = M(X1d, X1h, X2d, p) makes it cover every X1d of
+the search range (see skinsuction.diagnose._rays).  The rays of a cause at its
+null value are the neo-Hookean rays: the same jobs.
+"""
+
+from skinsuction.diagnose._causes import BASELINE, registry_from_config  # noqa: E402
+from skinsuction.diagnose._rays import RAY_ID_PATTERN, RaySpec, rays_of  # noqa: E402
+
+DG = config["diagnosis"]
+try:
+    DG_CAUSES = registry_from_config(DG["causes"])
+    DG_SPEC = RaySpec.from_config(DG, config.get("mesh"))
+except (KeyError, ValueError) as err:
+    raise _config_error("diagnosis", err)
+DG_MODELS = {BASELINE: None, **DG_CAUSES}
+DG_RAYS = {name: [r["ray_id"] for r in rays_of(DG_SPEC, cause)] for name, cause in DG_MODELS.items()}
+DG_ALL_RAYS = sorted(set().union(*DG_RAYS.values()))
+DG_MEASURED = dict(DG["measured"])
+DG_CODE = code_hash("diagnose", "identify", "space.py", "measured.py", "provenance.py")
+DG_FIG_CODE = code_hash("diagnose", "identify", "figures", "space.py", "measured.py")
+
+for _key in ("figure5", "figure6"):
+    if DG[_key]["measured"] not in DG_MEASURED:
+        raise _config_error(
+            f"diagnosis.{_key}.measured",
+            f"{DG[_key]['measured']!r} is not among diagnosis.measured ({', '.join(DG_MEASURED)})",
+        )
+if DG["figure5"]["space"] not in SPACE_POINTS:
+    raise _config_error(
+        "diagnosis.figure5.space",
+        f"{DG['figure5']['space']!r} is not among spaces ({', '.join(SPACE_POINTS)})",
+    )
+
+
+wildcard_constraints:
+    ray=RAY_ID_PATTERN,
+    model="|".join(map(re.escape, DG_MODELS)),
+    name="|".join(map(re.escape, DG_MEASURED)),
+
+
+DG_SPACES = expand("results/diagnosis/spaces/{model}.parquet", model=DG_MODELS)
+DIAGNOSIS_OUTPUTS = [
+    *DG_SPACES,
+    *expand(
+        "results/diagnosis/{name}/{file}",
+        name=DG_MEASURED,
+        file=["report.json", "report.md", "fit.png", "residuals.png", "gain.png"],
+    ),
+    "results/figures/fig5_measured_identifications.png",
+    "results/figures/fig5_measured_identifications.pdf",
+    "results/tables/fig5_measured_identifications.csv",
+    "results/figures/fig6_measured_vs_simulated.png",
+    "results/figures/fig6_measured_vs_simulated.pdf",
+    "results/tables/fig6_measured_vs_simulated.csv",
+]
+
+
+localrules:
+    diagnosis_spaces,
+
+
+rule diagnosis_spaces:
+    """Target: every ray space of the diagnosis (what `skinsuction diagnose` reads)."""
+    input:
+        DG_SPACES,
+
+
+rule make_example_measurement:
+    """The shipped synthetic example (runs only if data/ lacks it; see the script)."""
+    output:
+        csv="data/example_suction_synthetic.csv",
+    log:
+        "logs/diagnosis/make_example_measurement.log",
+    benchmark:
+        "results/benchmarks/diagnosis/make_example_measurement.tsv"
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/make_example_measurement.py"
+
+
+rule simulate_ray:
+    output:
+        ray="results/diagnosis/rays/{ray}.parquet",
+    log:
+        "logs/diagnosis/rays/{ray}.log",
+    benchmark:
+        "results/benchmarks/diagnosis/rays/{ray}.tsv"
+    params:
+        # a change of any of these reruns the FE jobs (Snakemake's params trigger)
+        pressures=list(DG_SPEC.pressures_mbar),
+        mesh=DG_SPEC.mesh,
+        code=code_hash("model"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=30,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/simulate_ray.py"
+
+
+rule assemble_diagnosis_space:
+    input:
+        rays=lambda w: expand("results/diagnosis/rays/{ray}.parquet", ray=DG_RAYS[w.model]),
+    output:
+        space="results/diagnosis/spaces/{model}.parquet",
+    log:
+        "logs/diagnosis/spaces/{model}.log",
+    params:
+        spec=DG_SPEC.to_dict(),
+        cause=lambda w: DG["causes"].get(w.model),
+        code=code_hash("diagnose", "space.py", "provenance.py"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/assemble_diagnosis_space.py"
+
+
+rule diagnose_measured:
+    input:
+        measured=lambda w: DG_MEASURED[w.name],
+        spaces=DG_SPACES,
+    output:
+        json=report(
+            "results/diagnosis/{name}/report.json",
+            caption="../report/diagnosis.rst",
+            category="Diagnosis",
+            labels={"measured": "{name}", "file": "report.json"},
+        ),
+        md="results/diagnosis/{name}/report.md",
+        fit=report(
+            "results/diagnosis/{name}/fit.png",
+            caption="../report/diagnosis.rst",
+            category="Diagnosis",
+            labels={"measured": "{name}", "file": "fit"},
+        ),
+        residuals=report(
+            "results/diagnosis/{name}/residuals.png",
+            caption="../report/diagnosis.rst",
+            category="Diagnosis",
+            labels={"measured": "{name}", "file": "residuals"},
+        ),
+        gain=report(
+            "results/diagnosis/{name}/gain.png",
+            caption="../report/diagnosis.rst",
+            category="Diagnosis",
+            labels={"measured": "{name}", "file": "gain"},
+        ),
+    log:
+        "logs/diagnosis/{name}.log",
+    benchmark:
+        "results/benchmarks/diagnosis/diagnose_{name}.tsv"
+    params:
+        decision=DG.get("decision", {}),
+        fit=DG.get("fit", {}),
+        code=DG_FIG_CODE,
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/diagnose_measured.py"
+
+
+rule diagnosis_fe_check:
+    input:
+        report="results/diagnosis/{name}/report.json",
+    output:
+        check="results/diagnosis/{name}/fe_check.csv",
+    log:
+        "logs/diagnosis/{name}_fe_check.log",
+    benchmark:
+        "results/benchmarks/diagnosis/fe_check_{name}.tsv"
+    params:
+        mesh=DG_SPEC.mesh,
+        bottom=DG_SPEC.bottom,
+        causes=DG["causes"],
+        code=code_hash("model", "diagnose"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=30,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/diagnosis_fe_check.py"
+
+
+rule fig5_measured_identifications:
+    input:
+        measured=DG_MEASURED[DG["figure5"]["measured"]],
+        space=f"results/simulated_space/{DG['figure5']['space']}.parquet",
+    output:
+        png=report(
+            "results/figures/fig5_measured_identifications.png",
+            caption="../report/fig5.rst",
+            category="Figures",
+            labels={"figure": "5", "format": "png"},
+        ),
+        pdf=report(
+            "results/figures/fig5_measured_identifications.pdf",
+            caption="../report/fig5.rst",
+            category="Figures",
+            labels={"figure": "5", "format": "pdf"},
+        ),
+        table="results/tables/fig5_measured_identifications.csv",
+        runs="results/diagnosis/fig5_runs.csv",
+    log:
+        "logs/figures/fig5_measured_identifications.log",
+    benchmark:
+        "results/benchmarks/figures/fig5_measured_identifications.tsv"
+    params:
+        settings=DG["figure5"],
+        code=DG_FIG_CODE,
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=30,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/fig5_measured_identifications.py"
+
+
+rule fig6_measured_vs_simulated:
+    input:
+        report=f"results/diagnosis/{DG['figure6']['measured']}/report.json",
+        check=f"results/diagnosis/{DG['figure6']['measured']}/fe_check.csv",
+    output:
+        png=report(
+            "results/figures/fig6_measured_vs_simulated.png",
+            caption="../report/fig6.rst",
+            category="Figures",
+            labels={"figure": "6", "format": "png"},
+        ),
+        pdf=report(
+            "results/figures/fig6_measured_vs_simulated.pdf",
+            caption="../report/fig6.rst",
+            category="Figures",
+            labels={"figure": "6", "format": "pdf"},
+        ),
+        table="results/tables/fig6_measured_vs_simulated.csv",
+    log:
+        "logs/figures/fig6_measured_vs_simulated.log",
+    params:
+        code=DG_FIG_CODE,
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/fig6_measured_vs_simulated.py"
