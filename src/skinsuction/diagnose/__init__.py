@@ -47,7 +47,14 @@ from ._rays import (
 )
 from ._report import write_report
 from ._stats import bic, misfit_test, noise_from_differences, noise_from_replicates
-from ._virtual import VirtualExperiment, draw_experiment, virtual_experiment, write_csv
+from ._virtual import (
+    DETECTABLE_EFFECTS,
+    DRAW_RANGES,
+    VirtualExperiment,
+    draw_experiment,
+    virtual_experiment,
+    write_csv,
+)
 
 __all__ = [
     "BASELINE", "NONE", "Cause", "DEFAULT_CAUSES", "default_registry", "registry_from_config",
@@ -59,5 +66,6 @@ __all__ = [
     "rays_of", "read_ray_space", "read_ray_spaces",
     "write_report",
     "bic", "misfit_test", "noise_from_differences", "noise_from_replicates",
-    "VirtualExperiment", "draw_experiment", "virtual_experiment", "write_csv",
+    "DETECTABLE_EFFECTS", "DRAW_RANGES", "VirtualExperiment", "draw_experiment",
+    "virtual_experiment", "write_csv",
 ]

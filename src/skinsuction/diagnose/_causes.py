@@ -168,7 +168,7 @@ def registry_from_config(causes: dict) -> dict:
 
     out = {}
     for name, spec in (causes or {}).items():
-        spec = dict(spec)
+        spec = {"modulus": False, **dict(spec)}
         try:
             spec["nodes"] = sorted(expand_axis(spec["nodes"]))
             out[name] = Cause(name=name, **{k: v for k, v in spec.items()

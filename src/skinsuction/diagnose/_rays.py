@@ -527,13 +527,19 @@ class RayInterpolant:
         n = theta.shape[0]
         sr, wr = self._axis_r.weights(theta[:, 1])
         ir = sr[:, None] + np.arange(self._axis_r.m)
+        # a ray with weight exactly 0 (the candidate sits on a node) is ignored, so a
+        # neighbouring ray that stopped early does not spoil a node (NaN * 0 = NaN)
         if self.d == 2:
-            g = np.einsum("nk,nkp->np", wr, self._g[ir, 0])
+            stencil = self._g[ir, 0]  # (N, mr, n_p - 1)
+            stencil = np.where((wr == 0.0)[:, :, None], 0.0, stencil)
+            g = np.einsum("nk,nkp->np", wr, stencil)
         else:
             sc, wc = self._axis_c.weights(theta[:, 2])
             ic = sc[:, None] + np.arange(self._axis_c.m)
             stencil = self._g[ir[:, :, None], ic[:, None, :]]  # (N, mr, mc, n_p - 1)
-            g = np.einsum("nk,nl,nklp->np", wr, wc, stencil)
+            w = wr[:, :, None] * wc[:, None, :]
+            stencil = np.where((w == 0.0)[..., None], 0.0, stencil)
+            g = np.einsum("nkl,nklp->np", w, stencil)
         out = np.empty((n, g.shape[1] + 1))
         out[:, 0] = 0.0
         np.exp(g, out=out[:, 1:])

@@ -18,13 +18,29 @@ import numpy as np
 from ._causes import NONE, Cause
 
 __all__ = ["VirtualExperiment", "virtual_experiment", "draw_experiment", "write_csv",
-           "DRAW_RANGES"]
+           "DRAW_RANGES", "DETECTABLE_EFFECTS"]
 
-#: Ranges of the random draws of the tests and the benchmark (see draw_experiment).
+#: Ranges of the random draws of the hidden-effect tests and the confusion benchmark:
+#: where the effects are detectable.  They change the shape of M(p) only where the
+#: skin deforms a lot (soft dermis, much softer hypodermis: 6 mm deflection at
+#: 100 mbar of 0.6-1.2 mm); at X1d = 0.04 MPa and X1h / X1d = 0.03 the neo-Hookean
+#: model absorbs X2d / X1d = 4, t_d = 1.6 mm or lambda0 = 1.06 in its two moduli to
+#: better than 0.5 µm RMS.  X1d and X1h / X1d are drawn log-uniform, the noise sd
+#: uniform (a Cutometer resolves about 1-10 µm).
 DRAW_RANGES = {
-    "x1d_mpa": (0.025, 0.08),
-    "x1h_over_x1d": (0.01, 0.3),
-    "noise_um": (1.0, 3.0),
+    "x1d_mpa": (0.025, 0.035),
+    "x1h_over_x1d": (0.006, 0.02),
+    "noise_um": (1.0, 2.5),
+}
+
+#: Effect sizes of the draws (ray coordinates: X2d / X1d, t_d in mm, lambda0), from
+#: where the misfit they leave in the neo-Hookean fit exceeds about half the noise.
+#: A cause may have several intervals (a thinner and a thicker dermis); a draw picks
+#: one with equal probability.
+DETECTABLE_EFFECTS = {
+    "strain_stiffening": ((6.0, 14.0),),
+    "dermis_thickness": ((0.65, 0.8), (1.6, 2.0)),
+    "pre_tension": ((1.05, 1.11),),
 }
 
 
@@ -46,6 +62,7 @@ class VirtualExperiment:
     clean: dict = field(default_factory=dict)  # probe -> noise-free FE curve (mm)
     converged: bool = True
     replicates: int = 1
+    unit: str | None = None
 
     @property
     def truth(self) -> dict:
@@ -74,7 +91,7 @@ def virtual_experiment(x1d, x1h, cause: Cause | None = None, value=None, *, nois
                            None if cause is None else float(value),
                            None if cause is None else cause.symbol, float(noise_um), seed, p,
                            tuple(float(q) for q in probes_mm), dict(mesh or {}),
-                           replicates=int(replicates))
+                           replicates=int(replicates), unit=None if cause is None else cause.unit)
     for probe in ve.probes_mm:
         c = simulate(x1d, x1h, probe_mm=probe, bottom=bottom, pressures_mbar=p,
                      mesh=dict(mesh or {}), **kw)
@@ -93,16 +110,21 @@ def draw_experiment(seed, cause: Cause | None, *, effect_range=None, ranges=None
     X1d log-uniform in ``ranges["x1d_mpa"]``, X1h / X1d log-uniform in
     ``ranges["x1h_over_x1d"]``, the noise uniform in ``ranges["noise_um"]`` and
     the hidden coordinate of the cause uniform in ``effect_range`` (ray
-    coordinate: X2d / X1d, t_d or lambda0).
+    coordinate: X2d / X1d, t_d or lambda0; default :data:`DETECTABLE_EFFECTS`).
+    ``ranges`` default to :data:`DRAW_RANGES`.
     """
     r = {**DRAW_RANGES, **(ranges or {})}
+    if cause is not None and effect_range is None:
+        effect_range = DETECTABLE_EFFECTS[cause.name]
     rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
     x1d = math.exp(rng.uniform(*np.log(r["x1d_mpa"])))
     ratio = math.exp(rng.uniform(*np.log(r["x1h_over_x1d"])))
     noise = rng.uniform(*r["noise_um"])
     value = None
     if cause is not None:
-        coord = rng.uniform(*effect_range)
+        intervals = np.atleast_2d(np.asarray(effect_range, dtype=float))
+        lo, hi = intervals[rng.integers(len(intervals))]
+        coord = rng.uniform(lo, hi)
         value = cause.value(coord, x1d)
     return virtual_experiment(x1d, ratio * x1d, cause, value, noise_um=noise, seed=seed, **kw)
 
@@ -117,7 +139,8 @@ def write_csv(ve: VirtualExperiment, path, header=()) -> Path:
     lines += [f"# true_cause: {truth['cause']}", f"# true_x1d_mpa: {ve.x1d:.6g}",
               f"# true_x1h_mpa: {ve.x1h:.6g}"]
     if ve.keyword:
-        lines.append(f"# true_{ve.keyword}: {ve.value:.6g}")
+        unit = {"MPa": "_mpa", "mm": "_mm"}.get(ve.unit or "", "")
+        lines.append(f"# true_{ve.keyword.lower()}{unit}: {ve.value:.6g}")
     lines += [f"# noise_sd_um: {ve.noise_um:.6g}", f"# noise_seed: {ve.seed}",
               f"# mesh: {ve.mesh}"]
     rep = ve.replicates > 1

@@ -21,10 +21,10 @@ __all__ = ["EXAMPLE", "make_example"]
 
 #: Parameters of the example (moduli in MPa, hidden effect in its unit).
 EXAMPLE = {
-    "x1d": 0.045,
-    "x1h": 9.0e-4,
+    "x1d": 0.03,
+    "x1h": 3.6e-4,  # X1h / X1d = 0.012 (the paper's experimental X1h was 3.7e-4 MPa)
     "cause": "strain_stiffening",
-    "value": 0.18,  # X2d in MPa (X2d / X1d = 4)
+    "value": 0.12,  # X2d in MPa (X2d / X1d = 4)
     "noise_um": 2.5,
     "seed": 2024,
     "mesh": {"refinement": 2.0},
@@ -47,14 +47,14 @@ def make_example(out="data/example_suction_synthetic.csv", params=None):
     if not ve.converged:
         raise RuntimeError("the FE model did not reach 100 mbar for the example")
     info = git_info()
-    commit = (info.get("commit") or "unknown") + (" (uncommitted changes)" if info.get("dirty")
-                                                   else "")
+    commit = (info.get("commit") or "unknown") + (" (working tree with uncommitted changes)"
+                                                   if info.get("dirty") else "")
     header = [
         "Made by skinsuction.diagnose.example.make_example (python -m skinsuction.diagnose.example)",
         "with the skinsuction FE model on a fine mesh (refinement 2), fixed bottom, hypodermis 1 mm,",
         "a hidden effect (true_cause below) and Gaussian noise on every deflection at p > 0.",
         "subject: synthetic",
-        f"model_git_commit: {commit}",
+        f"git_commit: {commit}",
     ]
     return write_csv(ve, out, header)
 

@@ -1,0 +1,319 @@
+"""The diagnosis without FE runs: statistics, ray spaces, fits, verdict, report, CLI.
+
+The ray spaces here are analytic stand-ins (a made-up two-layer curve family
+that obeys the scaling law), so every test runs in seconds; the hidden-effect
+tests with FE-made virtual experiments are in test_diagnose_hidden.py.
+"""
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from skinsuction.diagnose import (
+    BASELINE,
+    Cause,
+    FitData,
+    RayInterpolant,
+    RaySpace,
+    RaySpec,
+    Settings,
+    SpaceMissingError,
+    add_arguments,
+    bic,
+    default_registry,
+    diagnose,
+    fit_model,
+    misfit_test,
+    noise_from_differences,
+    noise_from_replicates,
+    parse_ray_id,
+    ray_id,
+    rays_of,
+    read_ray_space,
+    read_ray_spaces,
+    registry_from_config,
+    write_report,
+)
+from skinsuction.diagnose._rays import RAY_ID_PATTERN, _write_parquet
+from skinsuction.diagnose._stats import describe_residuals, difference_weights
+from skinsuction.identify import window_focusing
+from skinsuction.measured import load_measured
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+# ------------------------------------------------------------ window focusing, d = 3
+class Bowl:
+    """A 3-D quadratic bowl with its minimum at (0.3, -0.2, 0.7)."""
+
+    lower, upper = np.zeros(3) - 1, np.ones(3)
+    error_unit = "1"
+    centre = np.array([0.3, -0.2, 0.7])
+
+    def __call__(self, x):
+        return ((x - self.centre) ** 2 * [1, 10, 100]).sum(axis=1)
+
+    def error(self, cost):
+        return math.sqrt(cost)
+
+
+def test_window_focusing_finds_a_3d_minimum():
+    r = window_focusing(Bowl(), seed=0, n_samples=500, n_best=10, tolerance=1e-9)
+    assert r.estimate.shape == (3,)
+    np.testing.assert_allclose(r.estimate, Bowl.centre, atol=1e-3)
+    assert all(lo.shape == (3,) for lo, _ in r.windows)
+
+
+# ------------------------------------------------------------------ noise estimate
+def test_difference_weights_annihilate_quadratics_on_uneven_steps():
+    x = np.array([0.0, 1.0, 3.0, 3.5, 7.0, 9.0])
+    c = difference_weights(x, order=3)
+    assert c.shape == (3, 4)
+    np.testing.assert_allclose(np.linalg.norm(c, axis=1), 1.0)
+    for t in range(3):
+        xs = x[t:t + 4]
+        for poly in (np.ones_like(xs), xs, xs ** 2 - 3 * xs):
+            assert abs(c[t] @ poly) < 1e-9
+        assert abs(c[t] @ xs ** 3) > 1e-3
+
+
+def test_noise_from_differences_is_unbiased_and_its_dof_is_right():
+    p = np.arange(2.0, 101.0, 2.0)
+    smooth = 0.8 * (1 - np.exp(-p / 40))  # mm, a curved suction curve
+    rng = np.random.default_rng(0)
+    est = [noise_from_differences([(p, smooth + rng.normal(0, 2e-3, p.size)),
+                                   (p, 0.3 * smooth + rng.normal(0, 2e-3, p.size))])
+           for _ in range(400)]
+    sd = np.array([e.sd_um for e in est])
+    assert sd.mean() == pytest.approx(2.0, rel=0.03)
+    # the spread of the estimate matches the effective dof: sd(s)/s ~ 1/sqrt(2 dof)
+    assert sd.std() / sd.mean() == pytest.approx(1 / math.sqrt(2 * est[0].dof), rel=0.2)
+    assert noise_from_differences([(p, smooth)]).sd_um < 0.01  # the curve itself is removed
+
+
+def test_noise_from_replicates_pools_the_scatter():
+    rng = np.random.default_rng(1)
+    curve = np.linspace(0, 1, 40)
+    groups = [curve + rng.normal(0, 3e-3, (3, 40)), curve + rng.normal(0, 3e-3, (5, 40))]
+    est = noise_from_replicates(groups)
+    assert est.method == "replicates" and est.dof == 40 * 2 + 40 * 4
+    assert est.sd_um == pytest.approx(3.0, rel=0.1)
+    with pytest.raises(ValueError, match="two or more"):
+        noise_from_replicates([curve[None, :]])
+
+
+# ------------------------------------------------------------------ misfit test
+def test_misfit_test_false_alarm_rate_is_alpha_and_it_sees_a_pattern():
+    rng = np.random.default_rng(2)
+    p = np.arange(2.0, 101.0, 2.0)
+    alarms = 0
+    for _ in range(400):
+        res = {6.0: (p, rng.normal(0, 2.0, p.size)), 2.0: (p, rng.normal(0, 2.0, p.size))}
+        alarms += misfit_test(res, {6.0: 2.0, 2.0: 2.0}, math.inf, alpha=0.05).significant
+    assert 0.02 < alarms / 400 < 0.09
+    arch = 3.0 * np.sin(np.pi * p / 100)  # 1.5 noise sd, concave
+    res = {6.0: (p, arch + rng.normal(0, 2.0, p.size))}
+    t = misfit_test(res, {6.0: 2.0}, 40.0)
+    assert t.significant and t.p_value < 1e-4
+    text = describe_residuals(t, res, {6.0: 2.0})
+    assert "6 mm probe" in text and "concave" in text and "too little deflection" in text
+
+
+def test_bic_charges_ln_n_per_parameter():
+    assert bic(100.0, 3, 100) - bic(100.0, 2, 100) == pytest.approx(math.log(100))
+
+
+# ------------------------------------------------------------------ causes and ids
+def test_registry_of_the_configs_is_valid():
+    for name in ("config", "ci"):
+        cfg = yaml.safe_load((ROOT / "config" / f"{name}.yaml").read_text())
+        reg = registry_from_config(cfg["diagnosis"]["causes"])
+        assert {"strain_stiffening", "dermis_thickness", "pre_tension"} <= set(reg)
+        for c in reg.values():
+            assert c.neutral in c.nodes
+    reg = default_registry()
+    assert reg["strain_stiffening"].value(4.0, 0.03) == pytest.approx(0.12)
+    assert reg["pre_tension"].simulate_keywords(1.06, 0.03) == {"prestretch": 1.06}
+
+
+def test_a_cause_needs_its_neutral_value_among_the_nodes():
+    with pytest.raises(ValueError, match="neutral value"):
+        Cause("x", "t_d", "t_d", "mm", False, 1.0, (1.5, 2.0))
+    with pytest.raises(ValueError, match="reserved"):
+        Cause("none", "t_d", "t_d", "mm", False, 1.0, (1.0, 2.0))
+
+
+def test_ray_ids_round_trip_and_match_the_wildcard():
+    import re
+
+    params = dict(probe_mm=6, bottom="fixed", x1d=0.02, x1h=2e-4, x2d=0.08, prestretch=1.06)
+    rid = ray_id(params)
+    assert rid.endswith("__prestretch=1.06") and re.fullmatch(RAY_ID_PATTERN, rid)
+    back = parse_ray_id(rid)
+    assert back["prestretch"] == 1.06 and back["x2d"] == 0.08 and back["probe_mm"] == 6
+    assert "__" not in ray_id(dict(params, prestretch=1.0))  # neutral: plain point id
+
+
+def test_rays_of_a_cause_share_the_neo_hookean_rays():
+    spec = RaySpec([2, 6], (0.02, 0.2), [0.01, 0.1], [0, 50, 100])
+    reg = default_registry()
+    base = {r["ray_id"] for r in rays_of(spec)}
+    for cause in reg.values():
+        ids = {r["ray_id"] for r in rays_of(spec, cause)}
+        assert base <= ids and len(ids) == 2 * 2 * len(cause.nodes)
+
+
+# ------------------------------------------------------------- analytic ray spaces
+def toy_curve(x1d, r, c, p, probe, kind):
+    """A made-up smooth family with the scaling law: depends on p / X1d, r and c."""
+    q = p / (1e4 * x1d)  # p in mbar, X1d in MPa
+    # the hypodermis matters more under the wide probe, as in the FE model
+    soft = 0.4 * (1 + 0.2 / (r + 0.02)) if probe == 6 else 0.1 * (1 + 0.01 / (r + 0.02))
+    m = soft * q / (1 + 0.3 * soft * q)
+    if kind == "strain_stiffening":
+        m = m / (1 + 0.05 * c * m ** 2)
+    elif kind == "pre_tension":
+        m = m / (1 + 0.5 * (c - 1) / (0.02 + m))
+    return m
+
+
+def toy_spaces(ratio_nodes=np.geomspace(0.005, 0.5, 9), kinds=("strain_stiffening",
+                                                                  "pre_tension")):
+    spec = RaySpec([2, 6], (0.02, 0.2), ratio_nodes, np.arange(0, 101, 5.0))
+    reg = default_registry()
+    p = np.asarray(spec.pressures_mbar)
+    spaces = {}
+    for kind in (BASELINE, *kinds):
+        cause = reg.get(kind)
+        coords = np.array(cause.nodes if cause else [np.nan])
+        arrays = {}
+        for probe in spec.probes_mm:
+            a = np.empty((len(spec.ratio_nodes), coords.size, p.size))
+            for i, r in enumerate(spec.ratio_nodes):
+                for j, c in enumerate(coords):
+                    a[i, j] = toy_curve(spec.x1d_ref, r, c, p, probe, kind)
+            arrays[probe] = a
+        spaces[kind] = RaySpace(cause, spec, coords, arrays, {})
+    return spaces
+
+
+def test_ray_interpolant_is_exact_at_nodes_and_follows_the_scaling_law():
+    spaces = toy_spaces()
+    s = spaces["strain_stiffening"]
+    p = np.arange(5.0, 101.0, 5.0)
+    f = RayInterpolant(s, 6.0, p)
+    r, c = s.spec.ratio_nodes[3], s.coordinates[2]
+    # at X1d_ref the candidate reads its ray at the ray's own pressures
+    got = f([[math.log10(0.02), math.log10(r), c]])[0]
+    np.testing.assert_allclose(got, toy_curve(0.02, r, c, p, 6, "strain_stiffening"), rtol=1e-12)
+    # X1d = 2 X1d_ref reads the ray at p / 2 (nodes at 2.5 mbar steps are not all rays' nodes,
+    # so compare with the family, to the accuracy of the interpolation)
+    got = f([[math.log10(0.04), math.log10(r), c]])[0]
+    np.testing.assert_allclose(got, toy_curve(0.04, r, c, p, 6, "strain_stiffening"), rtol=2e-4)
+    # below X1d_ref and outside the ratio range: NaN (cost +inf)
+    assert np.isnan(f([[math.log10(0.019), math.log10(r), c]])).all()
+    assert np.isnan(f([[math.log10(0.03), math.log10(0.6), c]])).all()
+
+
+def test_ray_space_round_trips_through_parquet(tmp_path):
+    s = toy_spaces()["pre_tension"]
+    s.metadata = {"ray_spec": s.spec.to_dict(), "cause": s.cause.to_dict()}
+    _write_parquet(s.frame(), tmp_path / "pre_tension.parquet", s.metadata)
+    back = read_ray_space(tmp_path / "pre_tension.parquet")
+    assert back.cause == s.cause and back.spec == s.spec
+    for probe in (2.0, 6.0):
+        np.testing.assert_array_equal(back.rays(probe), s.rays(probe))
+    with pytest.raises(SpaceMissingError, match="neo_hookean"):
+        read_ray_spaces(tmp_path)
+    with pytest.raises(SpaceMissingError, match="snakemake"):
+        read_ray_spaces(tmp_path / "nowhere")
+
+
+def _toy_data(x1d, r, c, kind, noise_um, seed, probes=(2.0, 6.0)):
+    from skinsuction.measured import MeasuredCurve, MeasuredData
+
+    rng = np.random.default_rng(seed)
+    p = np.arange(0.0, 101.0, 2.0)
+    curves = []
+    for probe in probes:
+        m = toy_curve(x1d, r, c, p, probe, kind) + rng.normal(0, 1e-3 * noise_um, p.size)
+        m[0] = 0.0
+        curves.append(MeasuredCurve(probe, p, m, "", 1))
+    return MeasuredData("toy.csv", tuple(curves), {}, ())
+
+
+def test_fit_recovers_three_parameters_of_the_toy_family():
+    spaces = toy_spaces()
+    data = _toy_data(0.03, 0.02, 8.0, "strain_stiffening", 0.0, 0)
+    fd = {c.probe_mm: FitData(c.probe_mm, c.pressure_mbar[1:], c.deflection_mm[1:], 1.0)
+          for c in data.curves}
+    f = fit_model(spaces["strain_stiffening"], fd, seed=0, repeats=1)
+    assert f.parameters["X1d"] == pytest.approx(0.03, rel=1e-3)
+    assert f.parameters["X1h"] == pytest.approx(0.0006, rel=1e-2)
+    assert f.parameters["X2d"] == pytest.approx(0.24, rel=1e-2)
+    assert f.rms_um < 0.05
+
+
+@pytest.mark.parametrize("kind,coord", [("none", None), ("strain_stiffening", 16.0),
+                                        ("pre_tension", 1.09)])
+def test_toy_diagnosis_names_the_hidden_cause(kind, coord, tmp_path):
+    spaces = toy_spaces()
+    data = _toy_data(0.03, 0.02, coord, kind, 2.0, 3)
+    fast = Settings(repeats=1, window_focusing={"n_samples": 400, "n_best": 10,
+                                                "tolerance": 1e-6, "max_iter": 100})
+    report = diagnose(data, spaces, fast, source={"file": "toy.csv", "sha256": "0"})
+    assert report["cause"] == kind, report["summary"]
+    assert report["baseline"]["systematic_misfit"] == (kind != "none")
+    if kind != "none":
+        assert report["gain"]["delta_bic"] <= -10 and report["gain"]["E_ratio"] < 1
+    paths = write_report(report, tmp_path)
+    back = json.loads(paths["json"].read_text())  # strict JSON: no NaN
+    assert back["cause"] == kind and back["input"]["probes_mm"] == [2.0, 6.0]
+    assert {"input", "noise_um", "baseline", "candidates", "cause", "extended", "gain"} <= set(back)
+    for c in back["candidates"]:
+        assert {"cause", "parameters", "E_um", "delta_bic", "holdout_E_um"} <= set(c)
+    assert f"Cause: `{kind}`" in paths["md"].read_text().replace("**", "")
+    for name in ("fit", "residuals", "gain"):
+        assert paths[f"{name}_png"].stat().st_size > 1000
+
+
+def test_one_probe_only_has_no_holdout():
+    spaces = toy_spaces(kinds=("strain_stiffening",))
+    data = _toy_data(0.03, 0.02, None, "none", 2.0, 4, probes=(6.0,))
+    report = diagnose(data, spaces, Settings(repeats=1))
+    assert report["input"]["probes_mm"] == [6.0]
+    assert all(c["holdout_E_um"] is None for c in report["candidates"])
+    assert report["cause"] == "none" and report["gain"] is None
+
+
+# ------------------------------------------------------------------ CLI function
+def test_command_without_spaces_says_how_to_build_them(tmp_path):
+    from skinsuction.diagnose import command
+    from skinsuction.identify.measured_fit import InputError
+
+    csv = tmp_path / "m.csv"
+    csv.write_text("probe_mm,pressure_mbar,deflection_mm\n6,0,0\n6,50,0.3\n6,100,0.5\n")
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    args = parser.parse_args([str(csv), "--out", str(tmp_path / "out"),
+                              "--space-dir", str(tmp_path / "missing")])
+    with pytest.raises(InputError, match="diagnosis_spaces"):
+        command(args)
+    with pytest.raises(SystemExit):
+        parser.parse_args([str(csv), "--out", "o", "--delta-bic", "3"])
+
+
+def test_measured_loader_is_shared_with_identify(tmp_path):
+    csv = tmp_path / "m.csv"
+    csv.write_text("probe_mm,pressure_mbar,deflection_mm\n6,0,0\n6,50,300\n6,100,500\n")
+    from skinsuction.diagnose import diagnose_file
+    from skinsuction.measured import MeasuredDataError
+
+    with pytest.raises(MeasuredDataError, match="µm"):
+        diagnose_file(csv, spaces=toy_spaces(kinds=()))
+    assert load_measured  # same loader

@@ -1,0 +1,144 @@
+"""Hidden-effect tests: FE-made virtual experiments, diagnosed as a user would.
+
+Once per session the coarse ray spaces of config/ci.yaml are built (refinement
+0.5, 6 ratios X1h/X1d, 4 values per cause: 120 FE rays).  Each test draws from
+a seed which moduli, which effect size and which noise a virtual experiment
+has, runs the FE model directly at those parameters (on the same mesh as the
+spaces, so the test sees the interpolation and the statistics, not the mesh),
+writes the curves as a measured CSV and runs ``skinsuction diagnose`` on it
+through :func:`skinsuction.diagnose.command`.  It requires the hidden cause,
+a decisive gain, and the extended parameters within tolerance; and ``none``
+for a neo-Hookean experiment.
+
+Ranges of the draws, and why (see benchmarks/diagnose_confusion.py for the
+rates over many draws):
+
+* the effects change the shape of M(p) only where the skin deforms a lot: a
+  soft dermis and a much softer hypodermis.  At X1d = 0.04 MPa and
+  X1h / X1d = 0.03 the neo-Hookean model absorbs X2d / X1d = 4, t_d = 1.6 mm or
+  lambda0 = 1.06 in its two moduli to better than 0.5 µm RMS, below any noise
+  of a Cutometer; at X1d <= 0.035 MPa and X1h / X1d <= 0.02 (6 mm deflection
+  at 100 mbar 0.6-1.2 mm) they leave 1-20 µm.  So X1d is drawn in
+  0.025-0.035 MPa, X1h / X1d in 0.006-0.02 (log-uniform);
+* effect sizes from where the misfit they leave exceeds about half the noise:
+  X2d / X1d in 6-14, t_d in 1.6-2.0 mm, lambda0 in 1.05-1.11;
+* the noise sd in 1-2.5 µm (a Cutometer resolves about 1-10 µm; larger
+  noise needs larger effects).
+"""
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from skinsuction.diagnose import (
+    NONE,
+    DETECTABLE_EFFECTS,
+    DRAW_RANGES,
+    RaySpec,
+    add_arguments,
+    build_ray_spaces,
+    command,
+    draw_experiment,
+    registry_from_config,
+    write_csv,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Effect-size ranges and moduli/noise ranges of the draws (shared with the benchmark).
+EFFECTS = DETECTABLE_EFFECTS
+RANGES = DRAW_RANGES
+#: Tolerances on the extended parameters (relative for moduli, absolute otherwise).
+TOLERANCE = {"X1d": 0.15, "X2d": 0.35, "t_d": 0.25, "lambda0": 0.02}
+
+
+@pytest.fixture(scope="session")
+def ci_spaces(tmp_path_factory):
+    cfg = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
+    d = cfg["diagnosis"]
+    spec = RaySpec.from_config(d, cfg.get("mesh"))
+    causes = registry_from_config(d["causes"])
+    out = tmp_path_factory.mktemp("ci_spaces")
+    build_ray_spaces(spec, causes, out_dir=out, workers=2, config=cfg)
+    return out, spec, causes, d
+
+
+def run_user(csv, space_dir, out, *extra):
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    args = parser.parse_args([str(csv), "--out", str(out), "--space-dir", str(space_dir),
+                              "--repeats", "1", *extra])
+    assert command(args) == 0
+    return json.loads((Path(out) / "report.json").read_text())
+
+
+@pytest.mark.parametrize("cause,seed", [(NONE, 11), ("strain_stiffening", 12),
+                                        ("dermis_thickness", 13), ("pre_tension", 14)])
+def test_hidden_effect_is_named(ci_spaces, tmp_path, cause, seed):
+    space_dir, spec, causes, _ = ci_spaces
+    c = causes.get(cause)
+    ve = draw_experiment(seed, c, effect_range=EFFECTS.get(cause), ranges=RANGES,
+                         mesh=spec.mesh)
+    assert ve.converged
+    csv = write_csv(ve, tmp_path / "virtual.csv", ["hidden-effect test"])
+    report = run_user(csv, space_dir, tmp_path / "out")
+    truth = ve.truth
+    assert report["cause"] == cause, (truth, report["summary"])
+    assert report["noise_um"] == pytest.approx(ve.noise_um, rel=0.35)
+    if cause == NONE:
+        assert not report["baseline"]["systematic_misfit"], report["baseline"]["description"]
+        assert report["extended"] is None and report["gain"] is None
+        base = report["baseline"]["parameters"]
+        assert base["X1d"] == pytest.approx(ve.x1d, rel=0.05)
+        return
+    assert report["baseline"]["systematic_misfit"]
+    gain = report["gain"]
+    assert gain["delta_bic"] <= -10 and gain["E_ratio"] < 0.9
+    ext = report["extended"]["parameters"]
+    assert ext["X1d"] == pytest.approx(ve.x1d, rel=TOLERANCE["X1d"])
+    sym = c.symbol
+    tol = TOLERANCE[sym]
+    if c.modulus:
+        assert ext[sym] == pytest.approx(ve.value, rel=tol), (sym, ext, truth)
+    else:
+        assert ext[sym] == pytest.approx(ve.value, abs=tol), (sym, ext, truth)
+    # the report says in words where the misfit was
+    assert "mm probe" in report["baseline"]["description"]
+    for name in ("fit.png", "residuals.png", "gain.png", "report.md"):
+        assert (tmp_path / "out" / name).stat().st_size > 0
+
+
+def test_replicates_give_the_noise_and_the_same_verdict(ci_spaces, tmp_path):
+    space_dir, spec, causes, _ = ci_spaces
+    from skinsuction.diagnose import virtual_experiment
+
+    ve = virtual_experiment(0.028, 0.028 * 0.01, None, None, noise_um=3.0, seed=5,
+                            mesh=spec.mesh, replicates=3)
+    csv = write_csv(ve, tmp_path / "replicates.csv")
+    report = run_user(csv, space_dir, tmp_path / "out", "--no-holdout")
+    assert report["noise"]["method"] == "replicates"
+    assert report["noise_um"] == pytest.approx(3.0, rel=0.15)
+    # the mean of 3 curves is fitted: its noise is sd / sqrt(3)
+    s = report["noise"]["sigma_fitted_um"]["6"]
+    assert s == pytest.approx(math.hypot(report["noise_um"] / math.sqrt(3), 0.3), rel=1e-9)
+    assert report["cause"] == NONE
+
+
+def test_one_probe_file(ci_spaces, tmp_path):
+    space_dir, spec, causes, _ = ci_spaces
+    c = causes["strain_stiffening"]
+    from skinsuction.diagnose import virtual_experiment
+
+    ve = virtual_experiment(0.026, 0.026 * 0.008, c, 12 * 0.026, noise_um=1.5, seed=6,
+                            mesh=spec.mesh, probes_mm=(6.0,))
+    csv = write_csv(ve, tmp_path / "six.csv")
+    report = run_user(csv, space_dir, tmp_path / "out")
+    assert report["input"]["probes_mm"] == [6.0]
+    assert all(x["holdout_E_um"] is None for x in report["candidates"])
+    assert report["baseline"]["systematic_misfit"]
+    assert report["cause"] == "strain_stiffening", report["summary"]
