@@ -52,7 +52,7 @@ class MeshSettings:
     far_size: float = 0.4
     growth: float = 1.5
     probe_wall: bool = True
-    wall_penalty: float = 100.0
+    wall_penalty: float = 10.0
 
     @classmethod
     def from_dict(cls, settings=None):
