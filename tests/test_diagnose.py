@@ -220,6 +220,25 @@ def test_ray_interpolant_is_exact_at_nodes_and_follows_the_scaling_law():
     assert np.isnan(f([[math.log10(0.03), math.log10(0.6), c]])).all()
 
 
+def test_a_stopped_ray_is_avoided_by_shifting_the_stencil():
+    s = toy_spaces()["strain_stiffening"]  # coordinates 0, 2, 4, 8, 16, 32
+    p = np.arange(5.0, 101.0, 5.0)
+    r, c = math.sqrt(s.spec.ratio_nodes[3] * s.spec.ratio_nodes[4]), 3.0  # cell (2, 4)
+    theta = [[math.log10(0.02), math.log10(r), c]]
+    exact = toy_curve(0.02, r, c, p, 6, "strain_stiffening")
+    before = RayInterpolant(s, 6.0, p)(theta)[0]
+    rays = {q: a.copy() for q, a in s.deflection_mm.items()}
+    rays[6.0][:, 0, 12:] = np.nan  # the rays at X2d = 0 stopped at 55 mbar
+    stopped = RaySpace(s.cause, s.spec, s.coordinates, rays, {})
+    after = RayInterpolant(stopped, 6.0, p)(theta)[0]
+    assert np.all(np.isfinite(after))
+    np.testing.assert_allclose(after[:11], before[:11], rtol=1e-12)  # centred stencil
+    np.testing.assert_allclose(after, exact, rtol=2e-3)  # shifted stencil beyond 55 mbar
+    # on the stopped node itself there is nothing to shift to
+    on_node = [[math.log10(0.02), math.log10(r), 0.0]]
+    assert np.isnan(RayInterpolant(stopped, 6.0, p)(on_node)[0, 11:]).all()
+
+
 def test_ray_space_round_trips_through_parquet(tmp_path):
     s = toy_spaces()["pre_tension"]
     s.metadata = {"ray_spec": s.spec.to_dict(), "cause": s.cause.to_dict()}
@@ -317,3 +336,38 @@ def test_measured_loader_is_shared_with_identify(tmp_path):
     with pytest.raises(MeasuredDataError, match="µm"):
         diagnose_file(csv, spaces=toy_spaces(kinds=()))
     assert load_measured  # same loader
+
+
+# ------------------------------------------------------------------ workflow (dry run)
+def test_workflow_plans_one_fe_job_per_ray(tmp_path):
+    import shutil
+    import subprocess
+    import sys
+
+    for part in ("Snakefile", "workflow", "config", "src", "data"):
+        src = ROOT / part
+        if src.is_dir():
+            shutil.copytree(src, tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
+        else:
+            shutil.copy(src, tmp_path / part)
+    counts = {}
+    for name in ("config", "ci"):
+        res = subprocess.run([sys.executable, "-m", "snakemake", "-n", "--configfile",
+                              f"config/{name}.yaml", "--replace-workflow-config"],
+                             cwd=tmp_path, capture_output=True, text=True, timeout=300)
+        assert res.returncode == 0, res.stdout + res.stderr
+        table = res.stdout.split("Job stats:", 1)[1].splitlines()[3:]
+        counts[name] = dict((ln.split()[0], int(ln.split()[1])) for ln in table
+                            if len(ln.split()) == 2 and ln.split()[1].isdigit())
+        cfg = yaml.safe_load((tmp_path / "config" / f"{name}.yaml").read_text())["diagnosis"]
+        spec = RaySpec.from_config(cfg)
+        causes = registry_from_config(cfg["causes"])
+        n_rays = 2 * len(spec.ratio_nodes) * (1 + sum(len(c.nodes) - 1 for c in causes.values()))
+        assert counts[name]["simulate_ray"] == n_rays
+        assert counts[name]["assemble_diagnosis_space"] == 1 + len(causes)
+        assert counts[name]["diagnose_measured"] == len(cfg["measured"])
+        for rule in ("fig5_measured_identifications", "fig6_measured_vs_simulated",
+                     "diagnosis_fe_check"):
+            assert counts[name][rule] == 1
+        assert "make_example_measurement" not in counts[name]  # the example is shipped
+    assert counts["config"]["simulate_ray"] == 2 * 11 * 15

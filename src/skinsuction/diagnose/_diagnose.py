@@ -18,19 +18,18 @@ Decision rule (settings in :class:`Settings`, defaults from
    With a misfit that no candidate removes the verdict is ``none`` with
    ``verdict = "unexplained_misfit"``;
 4. ties: eligible candidates whose BIC lies within ``ambiguity_bic`` (6, the
-   "strong evidence" step of Kass and Raftery) of the best are reported as
-   ``ambiguous_with``; when both probes are present the tie is broken by the
-   cross-probe holdout: the candidate that, fitted on the 6 mm curve alone,
-   predicts the 2 mm curve best.  (A thicker dermis and a pre-tension change
-   the two curves almost alike, so their BICs tie; their predictions of one
-   probe from the other differ more.)
+   "strong evidence" step of Kass and Raftery) of the chosen one are reported
+   as ``ambiguous_with``: the curves cannot tell them apart.  (A thicker dermis
+   and a pre-tension change the 2 and 6 mm curves almost alike; breaking their
+   tie by the cross-probe holdout was tried and did no better than the BIC.)
 
 The cross-probe holdout is measured and reported for every model when both
 probes are present.  Its E is that of the 2 mm curve predicted from a fit of
 the 6 mm curve: the 6 mm probe identifies both layers, the 2 mm probe alone
 does not identify X1h (paper section 3.2), so the other direction fails for
 every model (it is in the detail).  With three parameters a single curve can
-leave a valley of near-equal fits, so the holdout is noisy: it only breaks ties.
+leave a valley of near-equal fits, so the holdout is noisy; it is not part of
+the rule.
 """
 
 from __future__ import annotations
@@ -305,19 +304,11 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
 
     # 3. verdict
     eligible = [c for c in candidates if c["decisive"] and c["removes_misfit"]]
-    tie_break = None
     if base_test.significant and eligible:
         best = min(eligible, key=lambda c: c["bic"])
         # candidates that explain the data about as well (BIC within ambiguity_bic): the
-        # curves of both probes together cannot separate them; the cross-probe holdout
-        # can (each fitted on the 6 mm curve alone, which predicts the 2 mm curve best?)
+        # curves cannot separate them; the lowest BIC is named, the others reported
         tied = [c for c in eligible if c["bic"] - best["bic"] < settings.ambiguity_bic]
-        if len(tied) > 1 and any(c["holdout_E_um"] is not None for c in tied):
-            by_holdout = min(tied, key=lambda c: math.inf if c["holdout_E_um"] is None
-                             else c["holdout_E_um"])
-            tie_break = {"tied": [c["cause"] for c in tied], "by": "holdout_E_um",
-                         "bic_choice": best["cause"], "holdout_choice": by_holdout["cause"]}
-            best = by_holdout
         cause, verdict = best["cause"], "cause_found"
         ambiguous = [c["cause"] for c in tied if c is not best]
     else:
@@ -362,7 +353,6 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
                        "holdout_E_um": runner_up["holdout_E_um"]}
                       if runner_up else None),
         "ambiguous_with": ambiguous,
-        "tie_break": tie_break,
         "summary": None,
         "settings": {**asdict(settings), "n_points": n_points},
         "spaces": {name: {"x1d_range_mpa": list(s.spec.x1d_range),
@@ -406,7 +396,8 @@ def summary_text(report: dict) -> str:
         return s
     c = next(c for c in report["candidates"] if c["cause"] == report["cause"])
     g = report["gain"]
-    s += (f"Cause: {c['cause']} ({c['hypothesis']}). Extended fit: "
+    hyp = f" ({c['hypothesis']})" if c.get("hypothesis") else ""
+    s += (f"Cause: {c['cause']}{hyp}. Extended fit: "
           f"{_params_text(c['parameters'])}, E = {c['E_um']:.3g} µm "
           f"(E ratio {g['E_ratio']:.2f}, delta BIC {g['delta_bic']:.1f}")
     if g["holdout_ratio"] is not None:
@@ -416,9 +407,6 @@ def summary_text(report: dict) -> str:
         others = ", ".join(report["ambiguous_with"])
         s += (f" {others} explains both curves almost as well (BIC within "
               f"{report['settings']['ambiguity_bic']:g})")
-        if report.get("tie_break"):
-            s += (f"; {c['cause']} is chosen because, fitted on the larger probe alone, it "
-                  "predicts the other probe best (cross-probe holdout)")
         s += (". Treat the two as hard to separate; an independent measurement (e.g. the "
               "dermis thickness by ultrasound or OCT) would decide.")
     elif report.get("runner_up"):

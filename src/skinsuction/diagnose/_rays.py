@@ -472,6 +472,35 @@ def _compute_ray_job(job):
 
 
 # ------------------------------------------------------------------ interpolation
+def _weights_at(axis: LagrangeAxis, x, start) -> np.ndarray:
+    """Lagrange weights of the stencils starting at ``start`` (not necessarily centred)."""
+    from skinsuction.identify._interpolate import _numerators
+
+    m = axis.m
+    table = axis._table[start]
+    w = _numerators(np.asarray(x, dtype=float)[:, None] - table[:, :m])
+    w /= table[:, m:]
+    return w
+
+
+def _alternative_starts(axis: LagrangeAxis, x, centred):
+    """Other stencil starts that still contain the cell of each x: [None, shifts...].
+
+    ``None`` stands for the centred start; a shift that leaves the cell outside the
+    stencil falls back to the centred one for that point.
+    """
+    cell = np.clip(np.searchsorted(axis.nodes, x, side="right") - 1, 0, axis.nodes.size - 2)
+    lo = np.maximum(cell + 2 - axis.m, 0)
+    hi = np.minimum(cell, axis.n_starts - 1)
+    out = [None]
+    for shift in (1, -1, 2, -2):
+        s = centred + shift
+        ok = (s >= lo) & (s <= hi)
+        if ok.any():
+            out.append(np.where(ok, s, centred))
+    return out
+
+
 class RayInterpolant:
     """M(X1d, X1h, c, p) of one probe at fixed measured pressures, vectorised.
 
@@ -521,25 +550,59 @@ class RayInterpolant:
             hi.append(self.space.cause.upper)
         return np.array(hi)
 
-    def combined_rays(self, theta) -> np.ndarray:
-        """The rays at (r, c) of the candidates on the ray pressures, (N, n_p), mm."""
-        theta = np.asarray(theta, dtype=float)
-        n = theta.shape[0]
-        sr, wr = self._axis_r.weights(theta[:, 1])
-        ir = sr[:, None] + np.arange(self._axis_r.m)
+    def _combine(self, theta, start_r, start_c=None):
+        """log M of the candidates' rays with the given stencil starts, (N, n_p - 1)."""
+        wr = _weights_at(self._axis_r, theta[:, 1], start_r)
+        ir = start_r[:, None] + np.arange(self._axis_r.m)
         # a ray with weight exactly 0 (the candidate sits on a node) is ignored, so a
         # neighbouring ray that stopped early does not spoil a node (NaN * 0 = NaN)
         if self.d == 2:
             stencil = self._g[ir, 0]  # (N, mr, n_p - 1)
             stencil = np.where((wr == 0.0)[:, :, None], 0.0, stencil)
-            g = np.einsum("nk,nkp->np", wr, stencil)
-        else:
+            return np.einsum("nk,nkp->np", wr, stencil)
+        wc = _weights_at(self._axis_c, theta[:, 2], start_c)
+        ic = start_c[:, None] + np.arange(self._axis_c.m)
+        stencil = self._g[ir[:, :, None], ic[:, None, :]]  # (N, mr, mc, n_p - 1)
+        w = wr[:, :, None] * wc[:, None, :]
+        stencil = np.where((w == 0.0)[..., None], 0.0, stencil)
+        return np.einsum("nkl,nklp->np", w, stencil)
+
+    def combined_rays(self, theta) -> np.ndarray:
+        """The rays at (r, c) of the candidates on the ray pressures, (N, n_p), mm.
+
+        NaN policy "shift" (as the identification's): where the centred stencil
+        holds a ray that stopped early, the other stencils that still contain the
+        candidate's cell are tried in turn, pressure by pressure.
+        """
+        theta = np.asarray(theta, dtype=float)
+        n = theta.shape[0]
+        sr, wr = self._axis_r.weights(theta[:, 1])
+        outside = np.isnan(wr[:, 0])
+        sc = None
+        if self.d == 3:
             sc, wc = self._axis_c.weights(theta[:, 2])
-            ic = sc[:, None] + np.arange(self._axis_c.m)
-            stencil = self._g[ir[:, :, None], ic[:, None, :]]  # (N, mr, mc, n_p - 1)
-            w = wr[:, :, None] * wc[:, None, :]
-            stencil = np.where((w == 0.0)[..., None], 0.0, stencil)
-            g = np.einsum("nkl,nklp->np", w, stencil)
+            outside |= np.isnan(wc[:, 0])
+        g = self._combine(theta, sr, sc)
+        g[outside] = np.nan  # no extrapolation
+        bad = np.flatnonzero(np.isnan(g).any(axis=1) & ~outside)
+        if bad.size:
+            th = theta[bad]
+            opt_r = _alternative_starts(self._axis_r, th[:, 1], sr[bad])
+            opt_c = (_alternative_starts(self._axis_c, th[:, 2], sc[bad]) if self.d == 3
+                     else [None])
+            sub = g[bad]
+            for a in opt_r:
+                for b in opt_c:
+                    if a is None and b is None:
+                        continue
+                    ra = sr[bad] if a is None else a
+                    cb = None if self.d == 2 else (sc[bad] if b is None else b)
+                    hole = np.isnan(sub)
+                    if not hole.any():
+                        break
+                    alt = self._combine(th, ra, cb)
+                    sub = np.where(hole, alt, sub)
+            g[bad] = sub
         out = np.empty((n, g.shape[1] + 1))
         out[:, 0] = 0.0
         np.exp(g, out=out[:, 1:])

@@ -91,8 +91,7 @@ def report_markdown(report: dict, figures=None) -> str:
         "Rule: a cause is named if the neo-Hookean residuals carry a systematic pattern, "
         f"its ΔBIC ≤ {report['settings']['delta_bic']:g} and its own residuals pass the "
         "pattern test; among those the lowest BIC wins, and candidates within "
-        f"{report['settings']['ambiguity_bic']:g} of it are a tie, broken by the "
-        "cross-probe holdout (fit on the 6 mm curve, predict the 2 mm curve).",
+        f"{report['settings']['ambiguity_bic']:g} of it are reported as a tie.",
         "",
     ]
     if figures:

@@ -142,6 +142,7 @@ def plot_gain(report: dict):
         b.invert_yaxis()
         b.set_xlabel("error ratio (< 1: better)")
         b.legend(loc="lower right", frameon=False, fontsize=6.5)
-        fig.suptitle(f"cause: {report['cause']}", fontsize=9)
+        fig.suptitle(f"cause: {report['cause']}   (green: named; orange: decisive ΔBIC but a "
+                     "misfit is left or it lost a tie; grey: not decisive)", fontsize=8)
         fig.tight_layout()
     return fig

@@ -99,7 +99,7 @@ def plot_fig5(runs: pd.DataFrame, table: pd.DataFrame, truth=None, probe_mm=6.0)
                 ax.axhline(truth[name] * scale, color="0.2", linestyle="--", linewidth=0.9,
                            label=f"true value of the synthetic curve {truth[name] * scale:.3g} {unit}")
             ax.set_ylabel(f"identified ${sym}$ ({unit})")
-            ax.legend(loc="best", frameon=False, fontsize=6.5)
+            ax.legend(loc="best", fontsize=6.5, framealpha=0.85, edgecolor="0.8")
         axes[1].set_xlabel("identification")
         axes[0].set_title(f"{len(runs)} neo-Hookean identifications, {probe_mm:g} mm probe, "
                           f"E = {t['E_min_um']:.3g}-{t['E_max_um']:.3g} µm", fontsize=8)
