@@ -22,7 +22,7 @@ Examples
 >>> s["E_fe_um"].round(2).tolist()
 [7.07, 0.0]
 >>> len(plot_fig6(t, s).axes)
-2
+4
 """
 
 from __future__ import annotations
@@ -74,27 +74,35 @@ def _params_text(row):
 
 
 def plot_fig6(check: pd.DataFrame, table: pd.DataFrame, title=None):
-    """Figure 6 from the FE check and its table."""
+    """Figure 6 from the FE check and its table: curves on top, residuals below."""
     import matplotlib.pyplot as plt
 
     panels = list(table["panel"])
     with _style.style():
-        fig, axes = plt.subplots(1, len(panels), figsize=(_style.WIDTH_IN, 3.3), sharey=True,
-                                 squeeze=False)
-        for ax, (_, row) in zip(axes[0], table.iterrows()):
+        fig, axes = plt.subplots(2, len(panels), figsize=(_style.WIDTH_IN, 4.6),
+                                 sharex=True, sharey="row", squeeze=False,
+                                 gridspec_kw={"height_ratios": [2.2, 1]})
+        for col, (_, row) in enumerate(table.iterrows()):
+            top, bottom = axes[0, col], axes[1, col]
             g = check[check["panel"] == row["panel"]]
             for probe, gp in sorted(g.groupby("probe_mm"), key=lambda kv: -kv[0]):
                 color = PROBE_COLOR.get(probe, "0.3")
-                ax.plot(gp["pressure_mbar"], gp["measured_mm"], linestyle="none", marker="o",
-                        markersize=2.6, markerfacecolor="none", color=color,
-                        label=f"{probe:g} mm measured (synthetic)")
-                ax.plot(gp["pressure_mbar"], gp["fe_mm"], color=color,
-                        label=f"{probe:g} mm simulated (FE)")
-            ax.set_title(f"({row['panel']}) {row['label']}\n{_params_text(row)}\n"
-                         f"E = {row['E_fe_um']:.3g} µm (interpolated fit "
-                         f"{row['E_interpolated_um']:.3g} µm)", fontsize=7)
-            ax.set_xlabel("suction pressure p (mbar)")
+                top.plot(gp["pressure_mbar"], gp["measured_mm"], linestyle="none", marker="o",
+                         markersize=2.6, markerfacecolor="none", color=color,
+                         label=f"{probe:g} mm measured (synthetic)")
+                top.plot(gp["pressure_mbar"], gp["fe_mm"], color=color,
+                         label=f"{probe:g} mm simulated (FE)")
+                bottom.plot(gp["pressure_mbar"], 1e3 * (gp["measured_mm"] - gp["fe_mm"]),
+                            marker="o", markersize=2.2, linewidth=0.8, color=color,
+                            label=f"{probe:g} mm")
+            bottom.axhline(0.0, color="0.3", linewidth=0.8)
+            top.set_title(f"({row['panel']}) {row['label']}\n{_params_text(row)}\n"
+                          f"E = {row['E_fe_um']:.3g} µm (interpolated fit "
+                          f"{row['E_interpolated_um']:.3g} µm)", fontsize=7)
+            bottom.set_xlabel("suction pressure p (mbar)")
         axes[0, 0].set_ylabel("apex deflection M (mm)")
+        axes[1, 0].set_ylabel("measured − sim. (µm)")
+        fig.align_ylabels(axes[:, 0])
         axes[0, 0].legend(loc="upper left", frameon=False, fontsize=6.5)
         if title:
             fig.suptitle(title, fontsize=8)
