@@ -103,21 +103,32 @@ def main(argv=None):
             data = load_measured(csv)
             fd, noise, _ = prepare_data(data, [2.0, 6.0], settings)
             f = fit_model(sp, fd, seed=0, repeats=2)
-            prof = profile(sp, fd, coords, f.theta)
+            # the coarse grid, and a fine one around the best value
+            fine = np.clip(f.theta[2] + np.linspace(-0.01, 0.01, 21), 0, X2H_NODES[-1])
+            grid = np.unique(np.concatenate([coords, fine]))
+            prof = profile(sp, fd, grid, f.theta)
             rep = diagnose_file(csv, out, settings, spaces=spaces)
+            without = {k: v for k, v in spaces.items() if k != "hypodermis_stiffening"}
+            rep0 = diagnose_file(csv, out, settings, spaces=without)
         chi = np.array([c for _, c, _, _ in prof])
         dchi = chi - min(chi.min(), f.chi2)
-        inside = coords[dchi <= 3.84]
+        inside = grid[dchi <= 3.84]
+        if not inside.size:
+            inside = grid[[int(np.argmin(dchi))]]
         truth = "" if cause is None or cause.keyword != "x2h" else f" (true {value / x1d:.3g})"
         print(f"\n{label}: best X2h / X1d = {f.theta[2]:.3g}{truth}, chi2 {f.chi2:.1f} "
               f"for {f.n_points} points; 95 % profile interval of X2h / X1d: "
               f"{inside.min():.3g}..{inside.max():.3g} (range 0..{X2H_NODES[-1]})")
         print("   X2h/X1d  delta chi2   X1d (MPa)   X1h (MPa)")
         for (c, _, a, b), dc in zip(prof, dchi):
-            print(f"   {c:7.4f}  {dc:9.2f}   {a:.4g}   {b:.4g}")
+            if c in coords:
+                print(f"   {c:7.4f}  {dc:9.2f}   {a:.4g}   {b:.4g}")
         cands = {c["cause"]: round(c["delta_bic"], 1) for c in rep["candidates"]}
         print(f"   diagnosis with hypodermis_stiffening in the registry: {rep['cause']} "
               f"(delta BIC {cands}; baseline misfit {rep['baseline']['systematic_misfit']})")
+        print(f"   diagnosis with the default registry: {rep0['cause']} ({rep0['verdict']}; "
+              + ", ".join(f"{c['cause']}: delta BIC {c['delta_bic']:.0f}, misfit left "
+                          f"{c['systematic_misfit']}" for c in rep0["candidates"]) + ")")
     return 0
 
 

@@ -237,7 +237,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     dict
         The report (see the package docstring for its contract).
     """
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     settings = settings or Settings()
     base_space = spaces[BASELINE]
     probes = [p for p in data.probes if base_space.has_probe(p)]
@@ -365,6 +365,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     }
     report["summary"] = summary_text(report)
     report["seconds"] = time.perf_counter() - t0
+    report["cpu_seconds"] = time.process_time() - c0
     from skinsuction import __version__
 
     report["skinsuction_version"] = __version__
