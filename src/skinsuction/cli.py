@@ -1,4 +1,5 @@
-"""The ``skinsuction`` command: ``simulate`` a suction test, ``identify`` moduli.
+"""The ``skinsuction`` command: ``simulate`` a suction test, ``identify`` moduli,
+``diagnose`` the misfit of the neo-Hookean model.
 
 ::
 
@@ -6,10 +7,11 @@
     skinsuction identify MEASURED.csv --space results/simulated_space/paper.parquet \\
         --objective single|weighted|ratio [--probe 6] [--alpha 0.5] [--repeats 100] \\
         [--seed 0] --out DIR
+    skinsuction diagnose MEASURED.csv --out DIR
 
 Each subcommand is a :class:`Command` in :data:`COMMANDS`: a function that adds
 its arguments to an ``argparse`` parser and a function that runs it and returns
-the exit code.  A new subcommand (e.g. ``diagnose``) is one more entry.
+the exit code.  A new subcommand is one more entry.
 
 Exit codes: 0 success; 1 unexpected internal error (one line; ``--debug`` shows
 the traceback); 2 bad usage or bad input (one line naming the file, line and
@@ -243,6 +245,19 @@ def _run_identify(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# ------------------------------------------------------------------ diagnose
+def _diagnose_arguments(p: argparse.ArgumentParser) -> None:
+    from skinsuction.diagnose._cli import add_arguments
+
+    add_arguments(p)
+
+
+def _run_diagnose(args: argparse.Namespace) -> int:
+    from skinsuction.diagnose._cli import command
+
+    return command(args)
+
+
 # ------------------------------------------------------------------ registry
 COMMANDS = {
     c.name: c
@@ -271,6 +286,18 @@ COMMANDS = {
             "naming the file, line and column, and exit code 2.",
             _identify_arguments,
             _run_identify,
+        ),
+        Command(
+            "diagnose",
+            "show where the neo-Hookean model misfits measured curves, name the cause",
+            "Fit the two-layer neo-Hookean model to measured suction curves (one or both "
+            "probes), test the residuals for a systematic misfit against the noise, fit "
+            "each candidate extension (strain stiffening, dermis thickness, pre-tension) "
+            "on the ray spaces built by the workflow, compare them by E, BIC and a "
+            "cross-probe holdout, and name the cause (or none). Writes DIR/report.json, "
+            "DIR/report.md and figures.",
+            _diagnose_arguments,
+            _run_diagnose,
         ),
     )
 }
