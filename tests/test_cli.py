@@ -64,7 +64,7 @@ def test_identify_help(capsys):
 def test_commands_registry_is_the_parser():
     parser = cli.build_parser()
     sub = next(a for a in parser._actions if a.dest == "command")
-    assert set(sub.choices) == set(cli.COMMANDS) == {"simulate", "identify"}
+    assert set(sub.choices) == set(cli.COMMANDS) == {"simulate", "identify", "diagnose"}
 
 
 # ------------------------------------------------------------------ simulate
@@ -294,3 +294,14 @@ def test_example_file_is_labelled_synthetic_and_loads():
     for probe in (2, 6):
         c = data.curve(probe)
         assert len(c) == 51 and c.deflection_mm[0] == 0 and np.all(np.diff(c.deflection_mm) > -0.01)
+
+
+def test_diagnose_without_spaces_is_a_one_line_input_error(tmp_path, capsys):
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[1] / "data" / "example_measured.csv"
+    code = cli.main(["diagnose", str(example), "--out", str(tmp_path / "out"),
+                     "--space-dir", str(tmp_path / "no_spaces")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2
+    assert len(err.splitlines()) == 1 and "no_spaces" in err
