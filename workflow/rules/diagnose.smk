@@ -76,22 +76,9 @@ rule diagnosis_spaces:
         DG_SPACES,
 
 
-rule make_example_measurement:
-    """The shipped synthetic example (runs only if data/ lacks it; see the script)."""
-    output:
-        csv="data/example_suction_synthetic.csv",
-    log:
-        "logs/diagnosis/make_example_measurement.log",
-    benchmark:
-        "results/benchmarks/diagnosis/make_example_measurement.tsv"
-    threads: 1
-    resources:
-        mem_mb=3000,
-        runtime=30,
-    conda:
-        "../envs/skinsuction.yaml"
-    script:
-        "../scripts/make_example_measurement.py"
+# The synthetic example of data/ is shipped, not made by the workflow (a rule
+# producing a tracked file reruns whenever its code changes); remake it by hand
+# with:  python -m skinsuction.diagnose.example data/example_suction_synthetic.csv
 
 
 rule simulate_ray:
