@@ -167,7 +167,7 @@ def test_optimiser_comparison_table(setup):
 
 
 # ------------------------------------------------------------ workflow end to end
-PARTS = ("Snakefile", "workflow", "config", "src")
+PARTS = ("Snakefile", "workflow", "config", "src", "data")  # data: the shipped example
 X1D = [0.001, 0.019, 0.037, 0.055, 0.073, 0.091]
 X1H = [1.0e-5, 4.1e-4, 8.1e-4, 1.21e-3, 1.61e-3, 2.01e-3]
 STAND_IN = '''"""Stand-in for the FE model (workflow tests only): the analytic surrogate."""

@@ -23,7 +23,7 @@ import yaml
 from skinsuction.space import grid_points, point_id, read_space
 
 ROOT = Path(__file__).resolve().parents[1]
-PARTS = ("Snakefile", "workflow", "config", "src")
+PARTS = ("Snakefile", "workflow", "config", "src", "data")  # data: the shipped example
 
 
 def copy_workflow(dst: Path) -> Path:
