@@ -325,6 +325,12 @@ def test_command_without_spaces_says_how_to_build_them(tmp_path):
         command(args)
     with pytest.raises(SystemExit):
         parser.parse_args([str(csv), "--out", "o", "--delta-bic", "3"])
+    bad = tmp_path / "spaces"
+    bad.mkdir()
+    (bad / "neo_hookean.parquet").write_text("not parquet")
+    args.space_dir = str(bad)
+    with pytest.raises(InputError, match="not a diagnosis space"):
+        command(args)
 
 
 def test_measured_loader_is_shared_with_identify(tmp_path):

@@ -107,7 +107,7 @@ def command(args: argparse.Namespace) -> int:
     from skinsuction.identify.measured_fit import InputError
 
     from ._diagnose import diagnose_file
-    from ._rays import SpaceMissingError
+    from ._rays import SpaceFileError, SpaceMissingError
     from ._report import write_report
 
     settings = Settings(alpha=args.alpha, delta_bic=args.delta_bic, noise_um=args.noise_um,
@@ -115,7 +115,7 @@ def command(args: argparse.Namespace) -> int:
                         seed=args.seed, holdout=not args.no_holdout)
     try:
         report = diagnose_file(args.measured, args.space_dir, settings)
-    except SpaceMissingError as err:
+    except (SpaceMissingError, SpaceFileError) as err:
         raise InputError(str(err)) from None
     try:
         paths = write_report(report, args.out)

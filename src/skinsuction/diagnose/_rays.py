@@ -78,6 +78,7 @@ __all__ = [
     "read_ray_spaces",
     "build_ray_spaces",
     "SpaceMissingError",
+    "SpaceFileError",
 ]
 
 #: Extra keywords of the model beyond the grid axes of a point id, with defaults.
@@ -89,6 +90,10 @@ RAY_ID_PATTERN = POINT_ID_PATTERN + r"(?:__[a-z][a-z0-9_]*=[^/_]+)*"
 
 class SpaceMissingError(FileNotFoundError):
     """The ray spaces the diagnosis needs are not there (build them with the workflow)."""
+
+
+class SpaceFileError(ValueError):
+    """A file of the space directory is not a ray space of the diagnosis."""
 
 
 # ------------------------------------------------------------------------ ray ids
@@ -415,8 +420,8 @@ def read_ray_spaces(space_dir) -> dict:
         try:
             s = read_ray_space(path)
         except Exception as err:  # pyarrow raises many types for a bad file
-            raise ValueError(f"{path}: not a diagnosis space ({type(err).__name__}: "
-                             f"{' '.join(str(err).split())[:200]})") from None
+            raise SpaceFileError(f"{path}: not a diagnosis space ({type(err).__name__}: "
+                                 f"{' '.join(str(err).split())[:200]})") from None
         spaces[s.name] = s
     if BASELINE not in spaces:
         raise SpaceMissingError(f"{d}: no {BASELINE}.parquet (the neo-Hookean rays); {hint}")
