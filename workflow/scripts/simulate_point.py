@@ -1,17 +1,10 @@
 """Rule simulate_point: one FE suction curve at one grid point."""
 
-import os
+# One job per core: the pools must be limited before NumPy is imported (the
+# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
+from skinsuction._threads import limit_threads
 
-# One job per core: keep BLAS/OpenMP pools to the rule's threads. Must be set
-# before NumPy is imported (the Snakemake preamble does not import it).
-for _var in (
-    "OMP_NUM_THREADS",
-    "OPENBLAS_NUM_THREADS",
-    "MKL_NUM_THREADS",
-    "NUMEXPR_NUM_THREADS",
-    "VECLIB_MAXIMUM_THREADS",
-):
-    os.environ[_var] = str(snakemake.threads)
+limit_threads(snakemake.threads)
 
 from skinsuction.provenance import log_to_file  # noqa: E402
 

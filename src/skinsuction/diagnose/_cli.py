@@ -14,58 +14,26 @@ with exit code 2.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
+
+from skinsuction.cli import _number, non_negative, positive, positive_int
 
 from ._diagnose import DEFAULT_SPACE_DIR, Settings
 
 __all__ = ["add_arguments", "command"]
 
 
-def _positive(text):
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
-    return v
-
-
-def _non_negative(text):
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (math.isfinite(v) and v >= 0):
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
-    return v
-
-
 def _level(text):
-    v = _positive(text)
+    v = positive(text)
     if not v < 1:
         raise argparse.ArgumentTypeError(f"must lie in (0, 1), got {text}")
     return v
 
 
 def _negative(text):
-    try:
-        v = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (math.isfinite(v) and v < 0):
+    v = _number(text)
+    if not v < 0:
         raise argparse.ArgumentTypeError(f"must be negative, got {text}")
-    return v
-
-
-def _count(text):
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {text}")
     return v
 
 
@@ -83,7 +51,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="folder of the ray spaces built by the workflow "
                         f"(neo_hookean.parquet and one file per cause; default {DEFAULT_SPACE_DIR}; "
                         "build with `snakemake --cores 2 diagnosis_spaces`)")
-    p.add_argument("--noise-um", type=_positive, default=None, metavar="UM",
+    p.add_argument("--noise-um", type=positive, default=None, metavar="UM",
                    help="noise sd of one measured deflection in µm, if known (default: "
                         "estimated from replicate curves, or from the curves' differences)")
     p.add_argument("--alpha", type=_level, default=d.alpha,
@@ -91,10 +59,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--delta-bic", type=_negative, default=d.delta_bic, metavar="DB",
                    help="BIC difference a cause must reach to earn its extra parameter "
                         f"(default {d.delta_bic:g}: very strong evidence)")
-    p.add_argument("--model-error-um", type=_non_negative, default=d.model_error_um,
+    p.add_argument("--model-error-um", type=non_negative, default=d.model_error_um,
                    metavar="UM", help="accuracy of the simulated spaces in µm, added in "
                                       f"quadrature to the noise (default {d.model_error_um:g})")
-    p.add_argument("--repeats", type=_count, default=d.repeats,
+    p.add_argument("--repeats", type=positive_int, default=d.repeats,
                    help=f"window focusing runs per fit (default {d.repeats})")
     p.add_argument("--seed", type=int, default=d.seed,
                    help="random seed; the same seed gives the same report (default 0)")
