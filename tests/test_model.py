@@ -108,6 +108,34 @@ def test_probe_wall_changes_nothing_where_the_skin_stays_inside():
     np.testing.assert_allclose(wall.deflection_mm, plain.deflection_mm, rtol=1e-9)
 
 
+def test_rounded_probe_edge_tends_to_the_sharp_edge():
+    # M is smooth in the edge radius R: its linear extrapolation from two small radii
+    # back to R = 0 lands on the sharp-edge model, which has no contact there at all
+    coarse = {"edge_size": 0.01}
+    sharp = simulate(**REFERENCE, probe_mm=2, mesh=coarse)
+    M = [
+        simulate(**REFERENCE, probe_mm=2, mesh={**coarse, "edge_radius": R}).deflection_mm[-1]
+        for R in (0.02, 0.04)
+    ]
+    extrapolated = 2 * M[0] - M[1]
+    assert M[0] > sharp.deflection_mm[-1]  # the skin under the rounding is sucked in too
+    assert abs(extrapolated / sharp.deflection_mm[-1] - 1) < 2e-3
+
+
+def test_skin_stays_outside_the_rounded_probe():
+    a, R = 1.0, 0.1
+    model = SuctionTest(0.01, 1e-3, probe_mm=2 * a, mesh={"edge_size": 0.01, "edge_radius": R})
+    curve = model.run(pressures_mbar=np.linspace(0, 30, 16))
+    assert curve.converged
+    edge = model.items[-1]
+    z, r = (model.mesh.points + model.field[0].values)[edge.points].T
+    # distance into the probe: the wall above the fillet centre, the fillet below it
+    fillet = R - np.hypot(z - R * a, r - (a + R) * a)
+    inside = np.where(z >= R * a, r - a, fillet)
+    assert np.any(r > a - 0.05)  # the skin does reach the edge
+    assert inside.max() < 1e-3 * R * a  # penetration: a small fraction of R
+
+
 def test_softer_bottom_conditions_deflect_more():
     coarse = {"refinement": 0.5, "edge_size": 0.02}
     M = {

@@ -41,6 +41,10 @@ class MeshSettings:
         Frictionless contact of the skin with the rigid inner wall of the probe.
     wall_penalty : float
         Penalty of the wall contact, relative to the mean nodal stiffness.
+    edge_radius : float
+        Radius of the rounded edge between the probe's wall and its glued face, as
+        a fraction of ``a`` (0: a sharp edge). The skin is glued from ``a (1 +
+        edge_radius)`` outwards and slides on the rounded edge inside that radius.
     """
 
     refinement: float = 1.0
@@ -53,6 +57,7 @@ class MeshSettings:
     growth: float = 1.5
     probe_wall: bool = True
     wall_penalty: float = 10.0
+    edge_radius: float = 0.0
 
     @classmethod
     def from_dict(cls, settings=None):
@@ -141,10 +146,15 @@ def suction_mesh(probe_mm, t_d, t_h, settings=MeshSettings()):
     g = settings.growth
     outer = settings.outer_radius_factor * (a + depth)
 
-    # radius: fine at the aperture edge on both sides, coarser at the axis and outside
+    # radius: fine at the aperture edge on both sides, coarser at the axis and outside;
+    # a rounded edge gets nodes at both of its ends and fine elements between them
     r_in = two_sided(0.0, a, 4 * h_edge, h_far, g, size_at_b=h_edge)
-    r_out = two_sided(a, outer, h_edge, h_far, g)
-    r = np.concatenate([r_in, r_out[1:]])
+    glued = a * (1 + settings.edge_radius)
+    r_edge = [a]
+    if settings.edge_radius > 0:
+        r_edge = two_sided(a, glued, h_edge, h_far, g, size_at_b=h_edge)
+    r_out = two_sided(glued, outer, h_edge, h_far, g)
+    r = np.concatenate([r_in, r_edge[1:], r_out[1:]])
 
     # depth: fine under the surface, a node line on the dermis/hypodermis interface
     z_d = -graded_coordinates(t_d, h_edge, h_far, g)

@@ -9,6 +9,7 @@ from scipy.sparse.linalg import splu
 from ._curve import Curve
 from ._geometry import MeshSettings, suction_mesh
 from ._material import SkinLayers, bulk_modulus, thickness_stretch
+from ._probe import ProbeEdge
 
 MBAR_TO_MPA = 1e-4
 BOTTOM_CONDITIONS = ("fixed", "axial", "free")
@@ -30,6 +31,10 @@ def _factorize(K):
 
 class NoEquilibrium(RuntimeError):
     """Newton's method found no equilibrium for one pressure increment."""
+
+    def __init__(self, message, iterations=0):
+        super().__init__(message)
+        self.iterations = iterations
 
 
 class SuctionTest:
@@ -87,10 +92,12 @@ class SuctionTest:
         )
         self.mesh, is_dermis = suction_mesh(probe_mm, t_d, t_h, mesh)
         a = probe_mm / 2
+        # the skin is glued to the probe's face outside the rounded edge
+        a_glued = a * (1 + mesh.edge_radius)
         if mesh.probe_wall:
-            # reference point of the rigid probe wall, outside every cell; it lies on
+            # reference point of the rigid probe, outside every cell; it lies on
             # the glued face, so it is fixed with it
-            self.mesh.update(points=np.vstack([self.mesh.points, [0.0, a]]))
+            self.mesh.update(points=np.vstack([self.mesh.points, [0.0, a_glued]]))
         z, r = self.mesh.points.T
         tol = 1e-9 * (a + t_d + t_h)
 
@@ -129,7 +136,7 @@ class SuctionTest:
             umat = SkinLayers(x1=x1, x2=x2, bulk=bulk_modulus(x1, poisson), prestretch=F0)
             self.solid = fem.SolidBody(umat, self.field)
 
-        inside = np.isclose(z, 0, atol=tol) & (r <= a + tol)
+        inside = np.isclose(z, 0, atol=tol) & (r <= a_glued + tol)
         surface = Boundary(self.mesh, only_surface=True, mask=inside, ensure_3d=True)
         self.suction = fem.SolidBodyPressure(
             fem.FieldContainer([fem.FieldAxisymmetric(surface, dim=2)])
@@ -140,19 +147,25 @@ class SuctionTest:
             # the skin inside the aperture cannot enter the probe: a frictionless
             # rigid wall at r = a (penalty contact), inactive until a surface point
             # is pulled outwards past the aperture edge
-            free_top = np.flatnonzero(inside & (r < a - tol))
-            self.items.append(
-                fem.ContactRigidPlane(
+            free_top = np.flatnonzero(inside & (r < a_glued - tol))
+            if mesh.edge_radius > 0:
+                wall = ProbeEdge(
+                    self.field, points=free_top, centerpoint=len(z) - 1,
+                    aperture_radius=a, edge_radius=mesh.edge_radius * a,
+                    multiplier=mesh.wall_penalty, items=[self.solid],
+                )
+            else:
+                wall = fem.ContactRigidPlane(
                     self.field, points=free_top, centerpoint=len(z) - 1,
                     normal=[0.0, -1.0], multiplier=mesh.wall_penalty,
                     items=[self.solid],
                 )
-            )
+            self.items.append(wall)
         u = self.field[0]
         boundaries = {
             "axis": fem.Boundary(u, mask=np.isclose(r, 0, atol=tol), skip=(1, 0)),
             "glued": fem.Boundary(
-                u, mask=np.isclose(z, 0, atol=tol) & (r >= a - tol)
+                u, mask=np.isclose(z, 0, atol=tol) & (r >= a_glued - tol)
             ),
         }
         bottom_nodes = np.isclose(z, -(t_d + t_h), atol=tol)
@@ -220,7 +233,7 @@ class SuctionTest:
         norm_before = np.inf
         for iteration in range(1, maxiter + 1):
             if not np.all(np.isfinite(f)):
-                raise NoEquilibrium("an element is inverted")
+                raise NoEquilibrium("an element is inverted", iteration - 1)
             r1 = f[self.dof1]
             norm_r1 = np.linalg.norm(r1)
             reactions = np.linalg.norm(f[self.dof0])
@@ -243,7 +256,7 @@ class SuctionTest:
             # round-off floor first: then a negligible correction means converged
             if np.all(np.isfinite(f)) and np.linalg.norm(du) <= xtol * np.linalg.norm(u_start + du):
                 return lu, iteration
-        raise NoEquilibrium(f"no convergence in {maxiter} iterations")
+        raise NoEquilibrium(f"no convergence in {maxiter} iterations", maxiter)
 
     def run(
         self,
@@ -300,15 +313,21 @@ class SuctionTest:
                     )
                     break
                 dp = min(dp, target - p_now)
-                # linear extrapolation of the last converged increment
+                # linear extrapolation of the last converged increment, unless it
+                # inverts an element (then Newton starts from the last equilibrium)
                 scale = dp / dp_last if dp_last > 0 else 0.0
                 u[:] = u_now + scale * (u_now - u_before)
+                if scale > 0:
+                    with np.errstate(all="ignore"):
+                        if not np.all(np.isfinite(self._residual())):
+                            u[:] = u_now
                 try:
                     with np.errstate(all="ignore"):
                         lu, used = self._equilibrium(p_now + dp, lu, tol, maxiter)
                     iterations += used
                 except (NoEquilibrium, RuntimeError, ValueError, np.linalg.LinAlgError) as err:
-                    iterations += maxiter
+                    # the budget counts the iterations spent, not the ones allowed
+                    iterations += getattr(err, "iterations", maxiter)
                     lu, dp = None, dp / 4
                     if dp < min_increment_mbar:
                         reason = (
