@@ -218,18 +218,20 @@ class SuctionTest:
         K = fem.tools.jac(self.items, self.field).tocsr()
         return _factorize(K[self.dof1][:, self.dof1])
 
-    def _equilibrium(self, pressure_mbar, lu, tol, maxiter, xtol=1e-9):
+    def _equilibrium(self, pressure_mbar, lu, tol, maxiter, xtol=1e-9, f=None):
         """Newton iterations at one pressure, in place on the displacement field.
 
         The factorised tangent ``lu`` is reused while the residual contracts fast
         (modified Newton) and refreshed when it does not; a step that inverts an
         element (non-finite residual) is halved before it is accepted.
+        ``f`` is the residual of the current state at this pressure, if known.
         Returns the tangent in use and the number of iterations.
         """
         # suction is a negative pressure: FElupe's positive pressure pushes inwards
         self.suction.update(-pressure_mbar * MBAR_TO_MPA)
         u = self.field[0].values.reshape(-1)
-        f = self._residual()
+        if f is None:
+            f = self._residual()
         norm_before = np.inf
         for iteration in range(1, maxiter + 1):
             if not np.all(np.isfinite(f)):
@@ -317,13 +319,14 @@ class SuctionTest:
                 # inverts an element (then Newton starts from the last equilibrium)
                 scale = dp / dp_last if dp_last > 0 else 0.0
                 u[:] = u_now + scale * (u_now - u_before)
-                if scale > 0:
-                    with np.errstate(all="ignore"):
-                        if not np.all(np.isfinite(self._residual())):
-                            u[:] = u_now
+                self.suction.update(-(p_now + dp) * MBAR_TO_MPA)
+                with np.errstate(all="ignore"):
+                    f = self._residual()
+                if not np.all(np.isfinite(f)):
+                    u[:], f = u_now, None
                 try:
                     with np.errstate(all="ignore"):
-                        lu, used = self._equilibrium(p_now + dp, lu, tol, maxiter)
+                        lu, used = self._equilibrium(p_now + dp, lu, tol, maxiter, f=f)
                     iterations += used
                 except (NoEquilibrium, RuntimeError, ValueError, np.linalg.LinAlgError) as err:
                     # the budget counts the iterations spent, not the ones allowed
