@@ -188,3 +188,13 @@ def test_pre_tension_stiffens_the_response():
     M = [simulate(**REFERENCE, probe_mm=6, pressures_mbar=pressures, mesh=coarse,
                   prestretch=lam).deflection_mm[-1] for lam in (1.0, 1.01, 1.03)]
     assert M[0] > M[1] > M[2]
+
+
+@pytest.mark.parametrize("name", ["_geometry", "_material", "_probe", "_simulate"])
+def test_docstring_examples(name):
+    import doctest
+    import importlib
+
+    module = importlib.import_module(f"skinsuction.model.{name}")
+    result = doctest.testmod(module)
+    assert result.attempted > 0 and result.failed == 0

@@ -95,7 +95,9 @@ def graded_coordinates(length, size_start, size_end, growth):
     sizes = np.array(sizes or [length])
     # spread the remainder over all elements so that the last one is not a sliver
     sizes *= length / sizes.sum()
-    return np.concatenate([[0.0], np.cumsum(sizes)])
+    x = np.concatenate([[0.0], np.cumsum(sizes)])
+    x[-1] = length  # exactly, not to the round-off of the sum
+    return x
 
 
 def subdivide(x, parts):

@@ -32,7 +32,8 @@ class ProbeEdge(fem.mechanics.ContactRigidBase):
 
     Examples
     --------
-    A point just inside the fillet is in contact; one on the axis is not.
+    A point just inside the fillet is in contact (negative gap); one on the axis
+    is not (positive gap).
 
     >>> import numpy as np, felupe as fem
     >>> mesh = fem.Rectangle(n=3)
@@ -41,7 +42,7 @@ class ProbeEdge(fem.mechanics.ContactRigidBase):
     >>> edge = ProbeEdge(field, [0, 8], 9, aperture_radius=1.0, edge_radius=0.2)
     >>> gap, normal, _ = edge._kinematics(np.array([[0.05, -0.05], [0.0, -1.2]]))
     >>> bool(gap[0] < 0), bool(gap[1] > 0)
-    (True, False)
+    (True, True)
     """
 
     def __init__(self, field, points, centerpoint, aperture_radius, edge_radius, **kwargs):
