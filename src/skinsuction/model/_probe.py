@@ -22,9 +22,8 @@ class ProbeEdge(fem.mechanics.ContactRigidBase):
     points : array_like of int
         Skin surface points that may touch the probe.
     centerpoint : int
-        A fixed point at ``(0, a + R)``.
-    aperture_radius : float
-        ``a``, the radius of the wall, in mm.
+        A fixed point at ``(0, a + R)``: it places the probe, so ``a`` itself is
+        not needed.
     edge_radius : float
         ``R``, the radius of the rounded edge, in mm (positive).
     **kwargs
@@ -39,16 +38,15 @@ class ProbeEdge(fem.mechanics.ContactRigidBase):
     >>> mesh = fem.Rectangle(n=3)
     >>> mesh.update(points=np.vstack([mesh.points, [0.0, 1.2]]))
     >>> field = fem.FieldContainer([fem.Field(fem.RegionQuad(mesh), dim=2)])
-    >>> edge = ProbeEdge(field, [0, 8], 9, aperture_radius=1.0, edge_radius=0.2)
+    >>> edge = ProbeEdge(field, [0, 8], 9, edge_radius=0.2)  # a = 1
     >>> gap, normal, _ = edge._kinematics(np.array([[0.05, -0.05], [0.0, -1.2]]))
     >>> bool(gap[0] < 0), bool(gap[1] > 0)
     (True, True)
     """
 
-    def __init__(self, field, points, centerpoint, aperture_radius, edge_radius, **kwargs):
+    def __init__(self, field, points, centerpoint, edge_radius, **kwargs):
         if not edge_radius > 0:
             raise ValueError(f"edge_radius must be positive, not {edge_radius!r}")
-        self.aperture_radius = float(aperture_radius)
         self.edge_radius = float(edge_radius)
         super().__init__(field, points, centerpoint, **kwargs)
 

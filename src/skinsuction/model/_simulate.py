@@ -151,7 +151,7 @@ class SuctionTest:
             if mesh.edge_radius > 0:
                 wall = ProbeEdge(
                     self.field, points=free_top, centerpoint=len(z) - 1,
-                    aperture_radius=a, edge_radius=mesh.edge_radius * a,
+                    edge_radius=mesh.edge_radius * a,
                     multiplier=mesh.wall_penalty, items=[self.solid],
                 )
             else:
