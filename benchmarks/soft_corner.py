@@ -26,13 +26,16 @@ POINTS = [  # (probe_mm, X1d, X1h) in MPa
     (6, 0.001, 1.01e-3),
     (6, 0.010, 1e-5),
 ]
+GRID = {"corner": "grid", "edge_size": 0.006}  # the tensor grid up to the edge
 VARIANTS = {
-    "default (quad8, reduced)": {},
-    "corner elements x2": {"edge_size": 0.012},
-    "corner elements x3.3": {"edge_size": 0.02},
-    "quad9, full": {"element": "quad9", "quadrature": "full"},
-    "rounded edge R = 0.05 a": {"edge_radius": 0.05},
-    "rounded edge R = 0.1 a": {"edge_radius": 0.1},
+    "default (fan, quad8)": {},
+    "fan, quad9, full": {"element": "quad9", "quadrature": "full"},
+    "grid (quad8, reduced)": GRID,
+    "grid, corner x2": {**GRID, "edge_size": 0.012},
+    "grid, corner x3.3": {**GRID, "edge_size": 0.02},
+    "grid, quad9, full": {**GRID, "element": "quad9", "quadrature": "full"},
+    "grid, rounded R = 0.05 a": {**GRID, "edge_radius": 0.05},
+    "grid, rounded R = 0.1 a": {**GRID, "edge_radius": 0.1},
 }
 
 

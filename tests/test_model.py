@@ -4,7 +4,9 @@ import felupe as fem
 import numpy as np
 import pytest
 
-from skinsuction.model import MeshSettings, SkinLayers, SuctionTest, bulk_modulus, simulate
+from skinsuction.model import (
+    MeshSettings, SkinLayers, SuctionTest, bulk_modulus, simulate, suction_mesh,
+)
 
 REFERENCE = dict(x1d=0.08, x1h=4.1e-4)
 
@@ -92,6 +94,47 @@ def test_reference_deflections():
     assert two.deflection_mm[-1] == pytest.approx(0.030, rel=0.01)
 
 
+@pytest.mark.parametrize("probe_mm, t_d, settings", [
+    (6, 1.0, {}), (2, 1.0, {}), (2, 0.4, {}), (6, 1.0, {"refinement": 2}),
+    (6, 1.0, {"refinement": 0.5}), (2, 1.0, {"element": "quad9"}),
+    (2, 1.0, {"corner": "grid"}),
+])
+def test_mesh_tiles_the_skin_disc_without_gaps_or_overlaps(probe_mm, t_d, settings):
+    # the cells' areas add up to the disc's section, no cell is inverted, and the
+    # edges used by one cell only add up to its perimeter: no hanging node at the
+    # seam between the fan and the grid, no collapsed cell with a free edge
+    settings = MeshSettings.from_dict(settings)
+    mesh, is_dermis = suction_mesh(probe_mm, t_d, 1.0, settings)
+    width, depth = settings.outer_radius_factor * (probe_mm / 2 + t_d + 1.0), t_d + 1.0
+    Region = (fem.RegionBiQuadraticQuad if settings.element == "quad9"
+              else fem.RegionQuadraticQuad)
+    region = Region(mesh, quadrature=fem.GaussLegendre(order=2, dim=2))
+    assert np.all(region.dV > 0)
+    np.testing.assert_allclose(region.dV.sum(), width * depth, rtol=1e-10)
+    np.testing.assert_allclose(region.dV[:, is_dermis].sum(), width * t_d, rtol=1e-10)
+    corners = mesh.cells[:, :4]
+    edges = np.sort(np.stack([corners, np.roll(corners, -1, axis=1)], axis=-1), axis=-1)
+    edges = edges.reshape(-1, 2)
+    edges = edges[edges[:, 0] != edges[:, 1]]  # the fan's collapsed sides
+    unique, count = np.unique(edges, axis=0, return_counts=True)
+    assert count.max() == 2
+    free = unique[count == 1]
+    length = np.linalg.norm(np.diff(mesh.points[free], axis=1), axis=-1).sum()
+    np.testing.assert_allclose(length, 2 * (width + depth), rtol=1e-10)
+
+
+def test_fan_lets_a_soft_dermis_turn_onto_the_probe_wall():
+    # a soft dermis wraps around the aperture edge: the graded grid's corner cells
+    # tangle at about 50 mbar, the fan's cells open like wedges and reach 100 mbar
+    soft = dict(x1d=0.001, x1h=2.01e-3, probe_mm=6)
+    grid = simulate(**soft, mesh={"corner": "grid", "edge_size": 0.006})
+    fan = simulate(**soft)
+    assert not grid.converged and fan.converged
+    # where both converged they agree to the discretisation error
+    ok = np.isfinite(grid.deflection_mm)
+    np.testing.assert_allclose(fan.deflection_mm[ok], grid.deflection_mm[ok], rtol=5e-3, atol=1e-6)
+
+
 def test_outer_radius_is_far_enough():
     pressures = np.linspace(0, 100, 6)
     near = simulate(**REFERENCE, probe_mm=6, pressures_mbar=pressures)
@@ -111,7 +154,7 @@ def test_probe_wall_changes_nothing_where_the_skin_stays_inside():
 def test_rounded_probe_edge_tends_to_the_sharp_edge():
     # M is smooth in the edge radius R: its linear extrapolation from two small radii
     # back to R = 0 lands on the sharp-edge model, which has no contact there at all
-    coarse = {"edge_size": 0.01}
+    coarse = {"corner": "grid", "edge_size": 0.01}
     sharp = simulate(**REFERENCE, probe_mm=2, mesh=coarse)
     M = [
         simulate(**REFERENCE, probe_mm=2, mesh={**coarse, "edge_radius": R}).deflection_mm[-1]
@@ -124,7 +167,7 @@ def test_rounded_probe_edge_tends_to_the_sharp_edge():
 
 def test_skin_stays_outside_the_rounded_probe():
     a, R = 1.0, 0.1
-    model = SuctionTest(0.01, 1e-3, probe_mm=2 * a, mesh={"edge_size": 0.01, "edge_radius": R})
+    model = SuctionTest(0.01, 1e-3, probe_mm=2 * a, mesh={"corner": "grid", "edge_size": 0.01, "edge_radius": R})
     curve = model.run(pressures_mbar=np.linspace(0, 30, 16))
     assert curve.converged
     edge = model.items[-1]

@@ -1,7 +1,7 @@
 """The forward model of the suction test (axisymmetric, two layers, finite strain)."""
 
 from ._curve import Curve
-from ._geometry import MeshSettings, suction_mesh
+from ._geometry import MeshSettings, edge_fan, suction_mesh
 from ._material import SkinLayers, bulk_modulus, prestress, thickness_stretch
 from ._simulate import BOTTOM_CONDITIONS, SuctionTest, simulate
 
@@ -12,6 +12,7 @@ __all__ = [
     "SkinLayers",
     "SuctionTest",
     "bulk_modulus",
+    "edge_fan",
     "prestress",
     "thickness_stretch",
     "simulate",
