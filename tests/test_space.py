@@ -366,6 +366,63 @@ def test_compute_point_records_a_model_exception_as_failed_point(tmp_path, stand
     assert frame["reason"].iloc[0].startswith("exception: RuntimeError: mesh generator crashed")
 
 
+@pytest.fixture
+def stopping_model(monkeypatch):
+    """Stand-in model whose solve stops at a pressure set per element type."""
+    calls = []
+    stops = {"quad8": 40.0, "quad9": None}
+
+    def simulate(x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, probe_mm=6.0, bottom="fixed",
+                 pressures_mbar=None, mesh=None, iteration_budget=None):
+        params = dict(probe_mm=probe_mm, bottom=bottom, x1d=x1d, x1h=x1h, x2d=x2d, x2h=x2h,
+                      t_d=t_d, t_h=t_h)
+        calls.append((mesh, iteration_budget))
+        return stand_in_curve(params, pressures_mbar, stops[mesh.get("element", "quad8")])
+
+    fake = types.ModuleType("skinsuction.model")
+    fake.Curve, fake.simulate = StandInCurve, simulate
+    monkeypatch.setitem(sys.modules, "skinsuction.model", fake)
+    return calls, stops
+
+
+FALLBACK = {"element": "quad9", "quadrature": "full", "iterations_per_step": 60}
+
+
+def test_fallback_mesh_replaces_a_stopped_solve(tmp_path, stopping_model):
+    calls, _ = stopping_model
+    pid = "p6_fixed_x1d0.001_x1h1e-05_x2d0_x2h0_td1_th1"
+    compute_point(pid, tmp_path / "c.parquet", PRESSURES, {"refinement": 0.5}, fallback=FALLBACK)
+    # the second solve keeps the other settings and gets its own Newton budget
+    assert calls == [({"refinement": 0.5}, None),
+                     ({"refinement": 0.5, "element": "quad9", "quadrature": "full"},
+                      60 * len(PRESSURES))]
+    frame, meta = read_curve(tmp_path / "c.parquet")
+    assert frame["converged"].all() and frame["mesh_fallback"].all()
+    assert meta["first_solve_reason"] == "newton diverged"
+    assert meta["mesh_fallback"] == FALLBACK
+    # both solves' time is accounted for
+    assert frame["seconds"].iloc[0] == pytest.approx(0.7 + 0.5)
+
+
+def test_fallback_that_stops_earlier_is_not_kept(tmp_path, stopping_model):
+    calls, stops = stopping_model
+    stops["quad9"] = 20.0
+    pid = "p6_fixed_x1d0.001_x1h1e-05_x2d0_x2h0_td1_th1"
+    compute_point(pid, tmp_path / "c.parquet", PRESSURES, {}, fallback=FALLBACK)
+    frame, meta = read_curve(tmp_path / "c.parquet")
+    assert len(calls) == 2 and not frame["mesh_fallback"].any()
+    assert frame["last_converged_mbar"].iloc[0] == 40.0 and "first_solve_reason" not in meta
+
+
+def test_no_fallback_solve_where_the_first_converges(tmp_path, stopping_model):
+    calls, stops = stopping_model
+    stops["quad8"] = None
+    compute_point("p6_fixed_x1d0.08_x1h0.001_x2d0_x2h0_td1_th1", tmp_path / "c.parquet",
+                  PRESSURES, {}, fallback=FALLBACK)
+    frame, _ = read_curve(tmp_path / "c.parquet")
+    assert len(calls) == 1 and frame["converged"].all() and not frame["mesh_fallback"].any()
+
+
 # ------------------------------------------------------------------- provenance
 def test_source_hash_changes_with_content(tmp_path):
     (tmp_path / "model").mkdir()

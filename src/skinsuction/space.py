@@ -84,6 +84,7 @@ COLUMNS = (
     "newton_iterations",
     "dofs",
     "seconds",
+    "mesh_fallback",
     "point_id",
 )
 
@@ -370,6 +371,7 @@ def curve_frame(curve, params: dict) -> pd.DataFrame:
         newton_iterations=np.full(n, int(curve.newton_iterations or 0), dtype=np.int64),
         dofs=np.full(n, int(curve.dofs or 0), dtype=np.int64),
         seconds=np.full(n, float(curve.seconds or 0.0)),
+        mesh_fallback=np.full(n, bool((getattr(curve, "info", None) or {}).get("mesh_fallback"))),
         point_id=[point_id(params)] * n,
     )
     return pd.DataFrame(data, columns=list(COLUMNS))
@@ -400,7 +402,9 @@ def write_curve(curve, params: dict, path, metadata: dict | None = None) -> Path
     return Path(path)
 
 
-def compute_point(pid: str, path, pressures_mbar, mesh: dict | None = None, metadata=None):
+def compute_point(
+    pid: str, path, pressures_mbar, mesh: dict | None = None, metadata=None, fallback=None
+):
     """Run the FE model at the grid point ``pid`` and write its curve file.
 
     The adapter of the workflow's ``simulate_point`` rule. A solve that does not
@@ -421,11 +425,18 @@ def compute_point(pid: str, path, pressures_mbar, mesh: dict | None = None, meta
         Mesh and solver settings (``config["mesh"]``), passed through.
     metadata : dict, optional
         Extra provenance (e.g. the source hash of the model).
+    fallback : dict, optional
+        Mesh settings (``config["mesh_fallback"]``) that replace those of ``mesh``
+        for a second solve when the first stops early, plus
+        ``iterations_per_step`` (its Newton budget per pressure, default 20). The
+        curve that reaches the higher pressure is kept; ``mesh_fallback`` in its
+        rows says which, and the metadata keeps the first solve's reason.
 
     Returns
     -------
     Curve
     """
+    import dataclasses
     import time
 
     from skinsuction.model import Curve, simulate
@@ -433,31 +444,52 @@ def compute_point(pid: str, path, pressures_mbar, mesh: dict | None = None, meta
 
     params = parse_point_id(pid)
     pressures = np.asarray(pressures_mbar, dtype=float)
-    log.info("point %s: %s, %d pressures, mesh %s", pid, params, pressures.size, mesh)
-    start = time.perf_counter()
-    try:
-        curve = simulate(**params, pressures_mbar=pressures, mesh=dict(mesh or {}))
-    except Exception as err:  # the model promises not to raise; record it if it does
-        log.exception("the model raised at point %s", pid)
-        curve = Curve(
-            pressure_mbar=pressures,
-            deflection_mm=np.full(pressures.shape, np.nan),
-            converged=False,
-            last_converged_mbar=float("nan"),
-            reason=f"exception: {type(err).__name__}: {err}",
-            seconds=time.perf_counter() - start,
+
+    def solve(settings, budget=None):
+        log.info("point %s: %s, %d pressures, mesh %s", pid, params, pressures.size, settings)
+        start = time.perf_counter()
+        try:
+            extra = {} if budget is None else {"iteration_budget": budget}
+            curve = simulate(**params, pressures_mbar=pressures, mesh=settings, **extra)
+        except Exception as err:  # the model promises not to raise; record it if it does
+            log.exception("the model raised at point %s", pid)
+            curve = Curve(
+                pressure_mbar=pressures,
+                deflection_mm=np.full(pressures.shape, np.nan),
+                converged=False,
+                last_converged_mbar=float("nan"),
+                reason=f"exception: {type(err).__name__}: {err}",
+                seconds=time.perf_counter() - start,
+            )
+        log.info(
+            "point %s: converged=%s last=%s mbar reason=%r newton=%s dofs=%s %.1f s",
+            pid,
+            curve.converged,
+            curve.last_converged_mbar,
+            curve.reason,
+            curve.newton_iterations,
+            curve.dofs,
+            curve.seconds,
         )
-    log.info(
-        "point %s: converged=%s last=%s mbar reason=%r newton=%s dofs=%s %.1f s",
-        pid,
-        curve.converged,
-        curve.last_converged_mbar,
-        curve.reason,
-        curve.newton_iterations,
-        curve.dofs,
-        curve.seconds,
-    )
-    meta = {"mesh": mesh, "provenance": collect(), **(metadata or {})}
+        return curve
+
+    curve = solve(dict(mesh or {}))
+    first_reason = None
+    if fallback and not curve.converged:
+        settings = dict(fallback)
+        per_step = settings.pop("iterations_per_step", 20)
+        second = solve({**dict(mesh or {}), **settings}, per_step * pressures.size)
+        reached = np.nan_to_num(curve.last_converged_mbar, nan=-1.0)
+        if np.nan_to_num(second.last_converged_mbar, nan=-1.0) > reached:
+            log.info("point %s: kept the fallback mesh's curve", pid)
+            first_reason = curve.reason
+            curve = dataclasses.replace(
+                second, seconds=curve.seconds + second.seconds,
+                info={**(second.info or {}), "mesh_fallback": True},
+            )
+    meta = {"mesh": mesh, "mesh_fallback": fallback, "provenance": collect(), **(metadata or {})}
+    if first_reason is not None:
+        meta["first_solve_reason"] = first_reason
     write_curve(curve, params, path, meta)
     return curve
 
@@ -673,8 +705,9 @@ def read_space(path) -> SimulatedSpace:
 def convergence_summary(frame: pd.DataFrame) -> pd.DataFrame:
     """Per (probe, bottom): number of points, converged, failed, solver effort.
 
-    Columns: ``probe_mm, bottom, n_points, n_converged, n_failed,
-    fraction_converged, min_last_converged_mbar, newton_iterations_median,
+    Columns: ``probe_mm, bottom, n_points, n_converged, n_failed, n_fallback``
+    (points whose kept curve is the fallback mesh's), ``fraction_converged,
+    min_last_converged_mbar, newton_iterations_median,
     dofs_median, seconds_median, seconds_total, reasons`` (failure reasons with
     their counts).
     """
@@ -690,6 +723,7 @@ def convergence_summary(frame: pd.DataFrame) -> pd.DataFrame:
                 "n_points": len(g),
                 "n_converged": int(g["converged"].sum()),
                 "n_failed": len(failed),
+                "n_fallback": int(g.get("mesh_fallback", pd.Series(False, g.index)).sum()),
                 "fraction_converged": float(g["converged"].mean()),
                 "min_last_converged_mbar": float(g["last_converged_mbar"].min()),
                 "newton_iterations_median": float(g["newton_iterations"].median()),

@@ -12,7 +12,9 @@ rule simulate_point:
         # a change of any of these reruns the FE jobs (Snakemake's params trigger)
         pressures=PRESSURES,
         mesh=config["mesh"],
-        code=code_hash("model"),
+        fallback=config["mesh_fallback"],
+        # the model, and the point adapter and curve format in space.py
+        code=code_hash("model", "space.py"),
     threads: 1
     resources:
         mem_mb=2000,

@@ -16,5 +16,6 @@ with log_to_file(snakemake.log[0]):
         snakemake.output.curve,
         pressures_mbar=snakemake.params.pressures,
         mesh=dict(snakemake.params.mesh),
+        fallback=snakemake.params.fallback,
         metadata={"source_hash": {"model": snakemake.params.code}},
     )

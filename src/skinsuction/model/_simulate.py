@@ -379,6 +379,7 @@ def simulate(
     pressures_mbar=None,
     mesh=None,
     prestretch=1.0,
+    iteration_budget=None,
 ):
     """Apex deflection M(p) of a two-layer skin model under a suction probe.
 
@@ -404,6 +405,8 @@ def simulate(
         their thickness so that the surface stays traction-free, and the outer
         radius holds the tension. The thicknesses are those of the pre-stretched
         skin. 1 is none.
+    iteration_budget : int, optional
+        Newton iterations before the solver gives up (default 20 per pressure).
 
     Returns
     -------
@@ -420,4 +423,4 @@ def simulate(
     model = SuctionTest(
         x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom, mesh, prestretch=prestretch
     )
-    return model.run(pressures_mbar)
+    return model.run(pressures_mbar, iteration_budget=iteration_budget)
