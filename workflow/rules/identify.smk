@@ -76,10 +76,12 @@ rule simulate_test_curve:
     benchmark:
         "results/benchmarks/identification/test_curve_{point}.tsv"
     params:
-        # same pressures and mesh as the simulated space: only the point is off the grid
+        # same pressures, mesh and fallback as the simulated space: only the point
+        # is off the grid
         pressures=PRESSURES,
         mesh=config["mesh"],
-        code=code_hash("model"),
+        fallback=config["mesh_fallback"],
+        code=code_hash("model", "space.py"),
     threads: 1
     resources:
         mem_mb=2000,
