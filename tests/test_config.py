@@ -12,6 +12,7 @@ import yaml
 from snakemake.exceptions import WorkflowError
 from snakemake.utils import validate
 
+from skinsuction.model import MeshSettings
 from skinsuction.space import expand_axis, grid_points
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -28,6 +29,9 @@ def test_configs_validate(name):
     config = load(name)
     validate(config, str(SCHEMA))
     assert config["mesh"]["element"] == "quad8"
+    # every fallback is a valid model setting (the schema lists only some keys)
+    for fallback in config["mesh_fallback"] or []:
+        MeshSettings.from_dict({k: v for k, v in fallback.items() if k != "iterations_per_step"})
     for spec in config["spaces"].values():
         assert grid_points(spec)
     assert expand_axis(config["pressures_mbar"])[0] == 0
@@ -63,8 +67,6 @@ def test_defaults_are_filled_in():
     }
     validate(config, str(SCHEMA))
     # the schema's defaults are the model's own defaults
-    from skinsuction.model import MeshSettings
-
     assert config["mesh"] == MeshSettings().to_dict()
     assert config["spaces"]["s"]["bottom"] == ["fixed"]
     assert config["spaces"]["s"]["x2d"] == [0.0] and config["spaces"]["s"]["t_h"] == [1.0]
@@ -107,6 +109,10 @@ BAD = [
     ("figure3.x1h", {"logspace": [-5, -1, 0]}, "x1h"),
     ("figure3.pressure_mbar", -5, "pressure_mbar"),
     ("identification", {"n": 1000}, "identification"),
+    ("mesh_fallback", {"element": "quad4"}, "mesh_fallback"),
+    ("mesh_fallback", [{"wall_penalty": 0}], "mesh_fallback"),
+    ("mesh_fallback", [], "mesh_fallback"),
+    ("mesh_fallback", {"smoothing": 1}, "mesh_fallback"),
 ]
 
 

@@ -370,14 +370,15 @@ def test_compute_point_records_a_model_exception_as_failed_point(tmp_path, stand
 def stopping_model(monkeypatch):
     """Stand-in model whose solve stops at a pressure set per element type."""
     calls = []
-    stops = {"quad8": 40.0, "quad9": None}
+    stops = {"quad8": 40.0, "quad9": None, "soft wall": None}
 
     def simulate(x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, probe_mm=6.0, bottom="fixed",
                  pressures_mbar=None, mesh=None, iteration_budget=None):
         params = dict(probe_mm=probe_mm, bottom=bottom, x1d=x1d, x1h=x1h, x2d=x2d, x2h=x2h,
                       t_d=t_d, t_h=t_h)
         calls.append((mesh, iteration_budget))
-        return stand_in_curve(params, pressures_mbar, stops[mesh.get("element", "quad8")])
+        key = "soft wall" if "wall_penalty" in mesh else mesh.get("element", "quad8")
+        return stand_in_curve(params, pressures_mbar, stops[key])
 
     fake = types.ModuleType("skinsuction.model")
     fake.Curve, fake.simulate = StandInCurve, simulate
@@ -399,7 +400,7 @@ def test_fallback_mesh_replaces_a_stopped_solve(tmp_path, stopping_model):
     frame, meta = read_curve(tmp_path / "c.parquet")
     assert frame["converged"].all() and frame["mesh_fallback"].all()
     assert meta["first_solve_reason"] == "newton diverged"
-    assert meta["mesh_fallback"] == FALLBACK
+    assert meta["mesh_fallback"] == FALLBACK and meta["mesh_fallback_kept"] == 1
     # both solves' time is accounted for
     assert frame["seconds"].iloc[0] == pytest.approx(0.7 + 0.5)
 
@@ -412,6 +413,23 @@ def test_fallback_that_stops_earlier_is_not_kept(tmp_path, stopping_model):
     frame, meta = read_curve(tmp_path / "c.parquet")
     assert len(calls) == 2 and not frame["mesh_fallback"].any()
     assert frame["last_converged_mbar"].iloc[0] == 40.0 and "first_solve_reason" not in meta
+
+
+def test_fallbacks_are_tried_in_order_until_one_converges(tmp_path, stopping_model):
+    calls, stops = stopping_model
+    stops["quad9"] = 60.0
+    chain = [FALLBACK, {**FALLBACK, "wall_penalty": 1.0}, {"element": "quad9"}]
+    pid = "p2_fixed_x1d0.001_x1h1e-05_x2d0_x2h0_td1_th1"
+    compute_point(pid, tmp_path / "c.parquet", PRESSURES, {}, fallback=chain)
+    # the third is not tried: the second converged
+    assert [mesh for mesh, _ in calls] == [
+        {}, {"element": "quad9", "quadrature": "full"},
+        {"element": "quad9", "quadrature": "full", "wall_penalty": 1.0},
+    ]
+    frame, meta = read_curve(tmp_path / "c.parquet")
+    assert frame["converged"].all() and frame["mesh_fallback"].all()
+    assert meta["mesh_fallback_kept"] == 2 and meta["first_solve_reason"] == "newton diverged"
+    assert frame["seconds"].iloc[0] == pytest.approx(0.7 + 0.7 + 0.5)
 
 
 def test_no_fallback_solve_where_the_first_converges(tmp_path, stopping_model):

@@ -402,6 +402,10 @@ def write_curve(curve, params: dict, path, metadata: dict | None = None) -> Path
     return Path(path)
 
 
+def _reached(curve) -> float:
+    return float(np.nan_to_num(curve.last_converged_mbar, nan=-1.0))
+
+
 def compute_point(
     pid: str, path, pressures_mbar, mesh: dict | None = None, metadata=None, fallback=None
 ):
@@ -425,12 +429,13 @@ def compute_point(
         Mesh and solver settings (``config["mesh"]``), passed through.
     metadata : dict, optional
         Extra provenance (e.g. the source hash of the model).
-    fallback : dict, optional
+    fallback : dict or list of dict, optional
         Mesh settings (``config["mesh_fallback"]``) that replace those of ``mesh``
-        for a second solve when the first stops early, plus
-        ``iterations_per_step`` (its Newton budget per pressure, default 20). The
-        curve that reaches the higher pressure is kept; ``mesh_fallback`` in its
-        rows says which, and the metadata keeps the first solve's reason.
+        for another solve while the solves so far stopped early, in order, each
+        with ``iterations_per_step`` (its Newton budget per pressure, default 20).
+        The curve that reaches the highest pressure is kept; ``mesh_fallback`` in
+        its rows says whether it is a fallback's, the metadata which one
+        (``mesh_fallback_kept``, from 1) and the first solve's reason.
 
     Returns
     -------
@@ -474,20 +479,26 @@ def compute_point(
         return curve
 
     curve = solve(dict(mesh or {}))
-    first_reason = None
-    if fallback and not curve.converged:
-        settings = dict(fallback)
+    first_reason, kept, spent = None, 0, curve.seconds
+    fallbacks = [fallback] if isinstance(fallback, dict) else list(fallback or [])
+    for k, settings in enumerate(fallbacks, start=1):
+        if curve.converged:
+            break
+        settings = dict(settings)
         per_step = settings.pop("iterations_per_step", 20)
-        second = solve({**dict(mesh or {}), **settings}, per_step * pressures.size)
-        reached = np.nan_to_num(curve.last_converged_mbar, nan=-1.0)
-        if np.nan_to_num(second.last_converged_mbar, nan=-1.0) > reached:
-            log.info("point %s: kept the fallback mesh's curve", pid)
-            first_reason = curve.reason
-            curve = dataclasses.replace(
-                second, seconds=curve.seconds + second.seconds,
-                info={**(second.info or {}), "mesh_fallback": True},
-            )
+        other = solve({**dict(mesh or {}), **settings}, per_step * pressures.size)
+        spent += other.seconds
+        if _reached(other) > _reached(curve):
+            log.info("point %s: kept the curve of fallback %d", pid, k)
+            first_reason = curve.reason if kept == 0 else first_reason
+            kept, curve = k, other
+    if kept:
+        curve = dataclasses.replace(curve, info={**(curve.info or {}), "mesh_fallback": kept})
+    if spent != curve.seconds:  # every solve's time counts
+        curve = dataclasses.replace(curve, seconds=spent)
     meta = {"mesh": mesh, "mesh_fallback": fallback, "provenance": collect(), **(metadata or {})}
+    if kept:
+        meta["mesh_fallback_kept"] = kept
     if first_reason is not None:
         meta["first_solve_reason"] = first_reason
     write_curve(curve, params, path, meta)
