@@ -231,11 +231,7 @@ def _fan_mesh(probe_mm, t_d, t_h, settings):
     divisions = max(1, round(settings.fan_divisions * min(settings.refinement, 1.0)))
     h_fan = size / divisions
     inner = min(s["h_edge"], size / (1 + 1 / divisions))
-    parts = int(settings.refinement) if settings.refinement > 1 else 1
-    if parts != settings.refinement and settings.refinement > 1:
-        raise ValueError(
-            f"a refinement above 1 must be a whole number, not {settings.refinement!r}"
-        )
+    parts = settings.refinement if settings.refinement > 1 else 1  # subdivide checks it
 
     # a tensor grid, uniform where it meets the fan's square, with the square cut out
     r = np.concatenate([
@@ -259,7 +255,7 @@ def _fan_mesh(probe_mm, t_d, t_h, settings):
     fan = edge_fan(a, size, inner, divisions, parts)
     mesh = fem.mesh.concatenate([grid, fan]).merge_duplicate_points(decimals=10)
     # the fan shares its square's boundary with the grid and collapses its centre
-    shared, collapsed = 4 * divisions * parts + 1, 4 * divisions * parts
+    shared, collapsed = 4 * divisions * int(parts) + 1, 4 * divisions * int(parts)
     if mesh.npoints != grid.npoints + fan.npoints - shared - collapsed:
         raise RuntimeError("the fan mesh does not match the grid around it")
     return mesh
