@@ -6,8 +6,9 @@
 #   snakemake --report report.html                    # figures with captions
 #
 # config -> FE curves (one job per grid point) -> simulated spaces -> figures
+#        -> FE ray bundles -> the scale-free space (identify/diagnose default) + coverage
 #        -> identifications (Figures 4, 4b, 7, 8, timing and optimiser tables)
-#        -> diagnoses of measured files (FE rays, ray spaces, reports, Figures 5, 6)
+#        -> diagnoses of measured files on the scale-free space (reports, Figures 5, 6)
 
 
 configfile: "config/config.yaml"
@@ -17,6 +18,11 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/simulate.smk"
 include: "workflow/rules/space.smk"
 include: "workflow/rules/figures.smk"
+
+
+if "scale_free_space" in config:
+
+    include: "workflow/rules/scale_free.smk"
 
 
 if "identification" in config:
@@ -40,6 +46,7 @@ localrules:
 rule all:
     input:
         final_outputs(),
+        SCALE_FREE_OUTPUTS if "scale_free_space" in config else [],
         IDENTIFICATION_OUTPUTS if "identification" in config else [],
         DIAGNOSIS_OUTPUTS if "diagnosis" in config else [],
     default_target: True

@@ -132,7 +132,7 @@ def test_bic_charges_ln_n_per_parameter():
 def test_registry_of_the_configs_is_valid():
     for name in ("config", "ci"):
         cfg = yaml.safe_load((ROOT / "config" / f"{name}.yaml").read_text())
-        reg = registry_from_config(cfg["diagnosis"]["causes"])
+        reg = registry_from_config(cfg["scale_free_space"]["causes"])
         assert {"strain_stiffening", "dermis_thickness", "pre_tension"} <= set(reg)
         for c in reg.values():
             assert c.neutral in c.nodes
@@ -160,7 +160,7 @@ def test_ray_ids_round_trip_and_match_the_wildcard():
 
 
 def test_rays_of_a_cause_share_the_neo_hookean_rays():
-    spec = RaySpec([2, 6], (0.02, 0.2), [0.01, 0.1], [0, 50, 100])
+    spec = RaySpec([2, 6], [0.01, 0.1], load_max=5000, load_steps=4)
     reg = default_registry()
     base = {r["ray_id"] for r in rays_of(spec)}
     for cause in reg.values():
@@ -184,7 +184,9 @@ def toy_curve(x1d, r, c, p, probe, kind):
 
 def toy_spaces(ratio_nodes=np.geomspace(0.005, 0.5, 9), kinds=("strain_stiffening",
                                                                   "pre_tension")):
-    spec = RaySpec([2, 6], (0.02, 0.2), ratio_nodes, np.arange(0, 101, 5.0))
+    # rays at X1d = 0.02 MPa to 100 mbar: p/X1d up to 5000 mbar/MPa in 20 steps
+    spec = RaySpec([2, 6], ratio_nodes, load_max=5000, load_steps=20, x1d_range=(0.02, 0.2),
+                   x1d_ref=0.02)
     reg = default_registry()
     p = np.asarray(spec.pressures_mbar)
     spaces = {}
@@ -208,23 +210,39 @@ def test_ray_interpolant_is_exact_at_nodes_and_follows_the_scaling_law():
     p = np.arange(5.0, 101.0, 5.0)
     f = RayInterpolant(s, 6.0, p)
     r, c = s.spec.ratio_nodes[3], s.coordinates[2]
+    u = s.cause.to_axis(c)  # the fit's coordinate: log10(1 + X2d/X1d)
     # at X1d_ref the candidate reads its ray at the ray's own pressures
-    got = f([[math.log10(0.02), math.log10(r), c]])[0]
+    got = f([[math.log10(0.02), math.log10(r), u]])[0]
     np.testing.assert_allclose(got, toy_curve(0.02, r, c, p, 6, "strain_stiffening"), rtol=1e-12)
     # X1d = 2 X1d_ref reads the ray at p / 2 (nodes at 2.5 mbar steps are not all rays' nodes,
     # so compare with the family, to the accuracy of the interpolation)
-    got = f([[math.log10(0.04), math.log10(r), c]])[0]
+    got = f([[math.log10(0.04), math.log10(r), u]])[0]
     np.testing.assert_allclose(got, toy_curve(0.04, r, c, p, 6, "strain_stiffening"), rtol=2e-4)
-    # below X1d_ref and outside the ratio range: NaN (cost +inf)
-    assert np.isnan(f([[math.log10(0.019), math.log10(r), c]])).all()
-    assert np.isnan(f([[math.log10(0.03), math.log10(0.6), c]])).all()
+    # beyond the load reach (p/X1d > 5000 at 100 mbar) and outside the ratio range: NaN
+    assert np.isnan(f([[math.log10(0.019), math.log10(r), u]])[0, -1])
+    assert np.isnan(f([[math.log10(0.03), math.log10(0.6), u]])).all()
+    assert f.lower[0] == pytest.approx(math.log10(0.02))  # 100 mbar / 5000 mbar/MPa
+
+
+def test_any_pressure_protocol_within_the_reach_of_the_space():
+    s = toy_spaces()["neo_hookean"]
+    # 300 mbar in 7.5 mbar steps, no 0 row: X1d from 300 / 5000 = 0.06 MPa up
+    p = np.arange(7.5, 300.1, 7.5)
+    f = RayInterpolant(s, 6.0, p)
+    assert f.lower[0] == pytest.approx(math.log10(0.06))
+    r = s.spec.ratio_nodes[4]
+    got = f([[math.log10(0.1), math.log10(r)]])[0]
+    np.testing.assert_allclose(got, toy_curve(0.1, r, 0, p, 6, BASELINE), rtol=2e-4)
+    # beyond the reach of the whole X1d window: a clear error naming the keys
+    with pytest.raises(ValueError, match="load.max"):
+        RayInterpolant(s, 6.0, [0, 2000.0])
 
 
 def test_a_stopped_ray_is_avoided_by_shifting_the_stencil():
-    s = toy_spaces()["strain_stiffening"]  # coordinates 0, 2, 4, 8, 16, 32
+    s = toy_spaces()["strain_stiffening"]  # coordinates 0, 1, 3, 10, 30, ...
     p = np.arange(5.0, 101.0, 5.0)
-    r, c = math.sqrt(s.spec.ratio_nodes[3] * s.spec.ratio_nodes[4]), 3.0  # cell (2, 4)
-    theta = [[math.log10(0.02), math.log10(r), c]]
+    r, c = math.sqrt(s.spec.ratio_nodes[3] * s.spec.ratio_nodes[4]), 2.0  # cell (1, 3)
+    theta = [[math.log10(0.02), math.log10(r), s.cause.to_axis(c)]]
     exact = toy_curve(0.02, r, c, p, 6, "strain_stiffening")
     before = RayInterpolant(s, 6.0, p)(theta)[0]
     rays = {q: a.copy() for q, a in s.deflection_mm.items()}
@@ -301,6 +319,32 @@ def test_toy_diagnosis_names_the_hidden_cause(kind, coord, tmp_path):
         assert paths[f"{name}_png"].stat().st_size > 1000
 
 
+@pytest.mark.parametrize("x1d,kind,coord,parameter,side,key", [
+    (0.012, "none", None, "X1d", "lower", "scale_free_space.x1d_mpa.min"),
+    (0.03, "pre_tension", 1.4, "lambda0", "upper", "scale_free_space.causes.pre_tension.nodes"),
+])
+def test_a_fit_at_the_edge_of_the_space_is_beyond_space_never_none(x1d, kind, coord,
+                                                                    parameter, side, key):
+    spaces = toy_spaces()  # X1d window 0.02..0.2 MPa, lambda0 up to 1.25
+    data = _toy_data(x1d, 0.02, coord, kind, 1.0, 5)
+    fast = Settings(repeats=1, holdout=False,
+                    window_focusing={"n_samples": 400, "n_best": 10, "tolerance": 1e-6,
+                                     "max_iter": 100})
+    report = diagnose(data, spaces, fast)
+    assert report["verdict"] == "beyond_space", report["summary"]
+    assert report["cause"] != "none"
+    hits = [f for f in report["beyond_space"] if f["parameter"] == parameter]
+    assert hits and hits[0]["side"] == side and hits[0]["config_key"] == key
+    assert "BEYOND THE SIMULATED SPACE" in report["summary"] and key in report["summary"]
+
+
+def test_a_fit_inside_the_space_is_not_flagged():
+    report = diagnose(_toy_data(0.05, 0.02, None, "none", 1.0, 6), toy_spaces(),
+                      Settings(repeats=1, holdout=False))
+    assert report["verdict"] == "neo_hookean_fits" and report["beyond_space"] == []
+    assert not any(f["at_bound"] for f in report["baseline"]["at_bound"].values())
+
+
 def test_one_probe_only_has_no_holdout():
     spaces = toy_spaces(kinds=("strain_stiffening",))
     data = _toy_data(0.03, 0.02, None, "none", 2.0, 4, probes=(6.0,))
@@ -321,7 +365,7 @@ def test_command_without_spaces_says_how_to_build_them(tmp_path):
     add_arguments(parser)
     args = parser.parse_args([str(csv), "--out", str(tmp_path / "out"),
                               "--space-dir", str(tmp_path / "missing")])
-    with pytest.raises(InputError, match="diagnosis_spaces"):
+    with pytest.raises(InputError, match="scale_free_space"):
         command(args)
     with pytest.raises(SystemExit):
         parser.parse_args([str(csv), "--out", "o", "--delta-bic", "3"])
@@ -329,7 +373,7 @@ def test_command_without_spaces_says_how_to_build_them(tmp_path):
     bad.mkdir()
     (bad / "neo_hookean.parquet").write_text("not parquet")
     args.space_dir = str(bad)
-    with pytest.raises(InputError, match="not a diagnosis space"):
+    with pytest.raises(InputError, match="not a scale-free space"):
         command(args)
 
 
@@ -365,15 +409,17 @@ def test_workflow_plans_one_fe_job_per_ray(tmp_path):
         table = res.stdout.split("Job stats:", 1)[1].splitlines()[3:]
         counts[name] = dict((ln.split()[0], int(ln.split()[1])) for ln in table
                             if len(ln.split()) == 2 and ln.split()[1].isdigit())
-        cfg = yaml.safe_load((tmp_path / "config" / f"{name}.yaml").read_text())["diagnosis"]
-        spec = RaySpec.from_config(cfg)
-        causes = registry_from_config(cfg["causes"])
-        n_rays = 2 * len(spec.ratio_nodes) * (1 + sum(len(c.nodes) - 1 for c in causes.values()))
-        assert counts[name]["simulate_ray"] == n_rays
-        assert counts[name]["assemble_diagnosis_space"] == 1 + len(causes)
+        full = yaml.safe_load((tmp_path / "config" / f"{name}.yaml").read_text())
+        cfg, sf = full["diagnosis"], full["scale_free_space"]
+        spec = RaySpec.from_config(sf)
+        causes = registry_from_config(sf["causes"])
+        # one job per (model, probe, ratio): the neutral rays once, in the neo-Hookean bundles
+        assert counts[name]["simulate_ray_bundle"] == 2 * len(spec.ratio_nodes) * (1 + len(causes))
+        assert counts[name]["assemble_scale_free_space"] == 1 + len(causes)
+        assert counts[name]["scale_free_coverage"] == 1
         assert counts[name]["diagnose_measured"] == len(cfg["measured"])
         for rule in ("fig5_measured_identifications", "fig6_measured_vs_simulated",
                      "diagnosis_fe_check"):
             assert counts[name][rule] == 1
         assert "make_example_measurement" not in counts[name]  # the example is shipped
-    assert counts["config"]["simulate_ray"] == 2 * 11 * 15
+    assert counts["config"]["simulate_ray_bundle"] == 2 * 16 * 4

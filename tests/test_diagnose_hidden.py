@@ -1,7 +1,7 @@
 """Hidden-effect tests: FE-made virtual experiments, diagnosed as a user would.
 
-Once per session the coarse ray spaces of config/ci.yaml are built (refinement
-0.5, 6 ratios X1h/X1d, 4 values per cause: 120 FE rays).  Each test draws from
+Once per session the coarse scale-free space of config/ci.yaml is built
+(refinement 0.5, 5 ratios X1h/X1d, 4 values per cause: 100 FE rays).  Each test draws from
 a seed which moduli, which effect size and which noise a virtual experiment
 has, runs the FE model directly at those parameters (on the same mesh as the
 spaces, so the test sees the interpolation and the statistics, not the mesh),
@@ -65,8 +65,8 @@ TOLERANCE = {"X1d": 0.15, "X2d": 0.35, "t_d": 0.25, "lambda0": 0.02}
 @pytest.fixture(scope="session")
 def ci_spaces(tmp_path_factory):
     cfg = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
-    d = cfg["diagnosis"]
-    spec = RaySpec.from_config(d, cfg.get("mesh"))
+    d = cfg["scale_free_space"]
+    spec = RaySpec.from_config(d, cfg.get("mesh"), cfg.get("mesh_fallback"))
     causes = registry_from_config(d["causes"])
     out = tmp_path_factory.mktemp("ci_spaces")
     build_ray_spaces(spec, causes, out_dir=out, workers=2, config=cfg)

@@ -4,7 +4,7 @@
 ::
 
     skinsuction simulate --probe 6 --x1d 0.08 --x1h 4.1e-4 [--out curve.csv]
-    skinsuction identify MEASURED.csv --space results/simulated_space/paper.parquet \\
+    skinsuction identify MEASURED.csv [--space results/simulated_space/scale_free] \\
         --objective single|weighted|ratio [--probe 6] [--alpha 0.5] [--repeats 100] \\
         [--seed 0] --out DIR
     skinsuction diagnose MEASURED.csv --out DIR
@@ -193,9 +193,11 @@ def _identify_arguments(p: argparse.ArgumentParser) -> None:
                    help="measured curves: CSV with columns probe_mm (mm), pressure_mbar "
                         "(suction, positive, mbar), deflection_mm (apex deflection, mm) and "
                         "optionally curve (replicate id); '#' lines are comments")
-    p.add_argument("--space", required=True, metavar="FILE",
-                   help="simulated space built by the workflow, "
-                        "e.g. results/simulated_space/paper.parquet")
+    p.add_argument("--space", default="results/simulated_space/scale_free", metavar="PATH",
+                   help="simulated space built by the workflow: the scale-free space "
+                        "(default results/simulated_space/scale_free; every X1d and any "
+                        "pressure protocol within its reach) or a grid database such as "
+                        "results/simulated_space/paper.parquet (the paper's 11 x 11 grid)")
     p.add_argument("--objective", choices=("single", "weighted", "ratio"), required=True,
                    help="single: one probe (paper eq. 4); weighted: 2 and 6 mm curves, "
                         "alpha on 2 mm (eq. 10); ratio: 6 mm / 2 mm deflections (eqs. 11-12)")

@@ -404,7 +404,7 @@ def _check_curve(path, rows: _Rows) -> None:
         )
 
 
-def _check_space(path, rows: _Rows, available_probes, pressure_range) -> None:
+def _check_space(path, rows: _Rows, available_probes, pressure_range, range_note=None) -> None:
     if available_probes is not None:
         probes = [float(q) for q in available_probes]
         if not any(math.isclose(rows.probe, q, abs_tol=1e-6) for q in probes):
@@ -420,7 +420,8 @@ def _check_space(path, rows: _Rows, available_probes, pressure_range) -> None:
             if p < lo - 1e-9 or p > hi + 1e-9:
                 raise MeasuredDataError(
                     path, line, "pressure_mbar",
-                    f"pressure {p:g} mbar is outside the simulated range {lo:g}..{hi:g} mbar",
+                    f"pressure {p:g} mbar is outside the simulated range {lo:g}..{hi:g} mbar"
+                    + (f" ({range_note})" if range_note else ""),
                 )
 
 
@@ -429,6 +430,7 @@ def load_measured(
     *,
     available_probes=None,
     pressure_range_mbar=None,
+    range_note: str | None = None,
 ) -> MeasuredData:
     """Read and check a measured-curve CSV file (format in the module docstring).
 
@@ -439,6 +441,8 @@ def load_measured(
         Probe diameters (mm) held by the simulated space; other probes are rejected.
     pressure_range_mbar : (float, float), optional
         Pressure range of the simulated space; pressures outside are rejected.
+    range_note : str, optional
+        What sets that range (e.g. the reach of the scale-free space), for the error.
 
     Returns
     -------
@@ -454,7 +458,7 @@ def load_measured(
     for rows in groups.values():
         _check_curve(path, rows)
     for rows in groups.values():
-        _check_space(path, rows, available_probes, pressure_range_mbar)
+        _check_space(path, rows, available_probes, pressure_range_mbar, range_note)
     curves = tuple(
         MeasuredCurve(
             probe_mm=rows.probe,

@@ -406,6 +406,73 @@ def _reached(curve) -> float:
     return float(np.nan_to_num(curve.last_converged_mbar, nan=-1.0))
 
 
+def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None, fallback=None,
+                         label: str = "model"):
+    """Solve the FE model, then the fallback meshes in order while it stops early.
+
+    The chain of :func:`compute_point`, for any model keywords (``params`` are
+    passed to :func:`skinsuction.model.simulate`, e.g. with ``prestretch``).
+    An exception of the model is logged and returned as a failed curve (all
+    NaN, ``reason="exception: ..."``), never raised.
+
+    Returns
+    -------
+    (Curve, int, str or None)
+        The curve that reaches the highest pressure (its ``seconds`` count every
+        solve, its ``info["mesh_fallback"]`` says which fallback, from 1), the
+        index of that fallback (0: the first solve) and the first solve's reason
+        when a fallback's curve was kept.
+    """
+    import dataclasses
+    import time
+
+    from skinsuction.model import Curve, simulate
+
+    pressures = np.asarray(pressures_mbar, dtype=float)
+
+    def solve(settings, budget=None):
+        log.info("%s: %s, %d pressures, mesh %s", label, params, pressures.size, settings)
+        start = time.perf_counter()
+        try:
+            extra = {} if budget is None else {"iteration_budget": budget}
+            curve = simulate(**params, pressures_mbar=pressures, mesh=settings, **extra)
+        except Exception as err:  # the model promises not to raise; record it if it does
+            log.exception("the model raised at %s", label)
+            curve = Curve(
+                pressure_mbar=pressures,
+                deflection_mm=np.full(pressures.shape, np.nan),
+                converged=False,
+                last_converged_mbar=float("nan"),
+                reason=f"exception: {type(err).__name__}: {err}",
+                seconds=time.perf_counter() - start,
+            )
+        log.info("%s: converged=%s last=%s mbar reason=%r newton=%s dofs=%s %.1f s", label,
+                 curve.converged, curve.last_converged_mbar, curve.reason,
+                 curve.newton_iterations, curve.dofs, curve.seconds)
+        return curve
+
+    curve = solve(dict(mesh or {}))
+    first_reason, kept, spent = None, 0, curve.seconds
+    fallbacks = [fallback] if isinstance(fallback, dict) else list(fallback or [])
+    for k, settings in enumerate(fallbacks, start=1):
+        if curve.converged:
+            break
+        settings = dict(settings)
+        per_step = settings.pop("iterations_per_step", 20)
+        other = solve({**dict(mesh or {}), **settings}, per_step * pressures.size)
+        spent += other.seconds
+        if _reached(other) > _reached(curve):
+            log.info("%s: kept the curve of fallback %d", label, k)
+            first_reason = curve.reason if kept == 0 else first_reason
+            kept, curve = k, other
+    if kept:
+        curve = dataclasses.replace(curve, info={**(curve.info or {}), "mesh_fallback": kept})
+    if spent != curve.seconds:  # every solve's time counts
+        curve = dataclasses.replace(curve, seconds=spent)
+    return curve, kept, first_reason
+
+
+
 def compute_point(
     pid: str, path, pressures_mbar, mesh: dict | None = None, metadata=None, fallback=None
 ):
@@ -441,61 +508,11 @@ def compute_point(
     -------
     Curve
     """
-    import dataclasses
-    import time
-
-    from skinsuction.model import Curve, simulate
     from skinsuction.provenance import collect
 
     params = parse_point_id(pid)
-    pressures = np.asarray(pressures_mbar, dtype=float)
-
-    def solve(settings, budget=None):
-        log.info("point %s: %s, %d pressures, mesh %s", pid, params, pressures.size, settings)
-        start = time.perf_counter()
-        try:
-            extra = {} if budget is None else {"iteration_budget": budget}
-            curve = simulate(**params, pressures_mbar=pressures, mesh=settings, **extra)
-        except Exception as err:  # the model promises not to raise; record it if it does
-            log.exception("the model raised at point %s", pid)
-            curve = Curve(
-                pressure_mbar=pressures,
-                deflection_mm=np.full(pressures.shape, np.nan),
-                converged=False,
-                last_converged_mbar=float("nan"),
-                reason=f"exception: {type(err).__name__}: {err}",
-                seconds=time.perf_counter() - start,
-            )
-        log.info(
-            "point %s: converged=%s last=%s mbar reason=%r newton=%s dofs=%s %.1f s",
-            pid,
-            curve.converged,
-            curve.last_converged_mbar,
-            curve.reason,
-            curve.newton_iterations,
-            curve.dofs,
-            curve.seconds,
-        )
-        return curve
-
-    curve = solve(dict(mesh or {}))
-    first_reason, kept, spent = None, 0, curve.seconds
-    fallbacks = [fallback] if isinstance(fallback, dict) else list(fallback or [])
-    for k, settings in enumerate(fallbacks, start=1):
-        if curve.converged:
-            break
-        settings = dict(settings)
-        per_step = settings.pop("iterations_per_step", 20)
-        other = solve({**dict(mesh or {}), **settings}, per_step * pressures.size)
-        spent += other.seconds
-        if _reached(other) > _reached(curve):
-            log.info("point %s: kept the curve of fallback %d", pid, k)
-            first_reason = curve.reason if kept == 0 else first_reason
-            kept, curve = k, other
-    if kept:
-        curve = dataclasses.replace(curve, info={**(curve.info or {}), "mesh_fallback": kept})
-    if spent != curve.seconds:  # every solve's time counts
-        curve = dataclasses.replace(curve, seconds=spent)
+    curve, kept, first_reason = solve_with_fallbacks(params, pressures_mbar, mesh, fallback,
+                                                     label=f"point {pid}")
     meta = {"mesh": mesh, "mesh_fallback": fallback, "provenance": collect(), **(metadata or {})}
     if kept:
         meta["mesh_fallback_kept"] = kept

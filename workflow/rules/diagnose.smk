@@ -1,31 +1,17 @@
 """Diagnosis of measured curves (what the neo-Hookean model gets wrong, and why), Figures 5, 6.
 
-Included by the Snakefile when the configuration has a `diagnosis` section.
+Included by the Snakefile when the configuration has a `diagnosis` section (it
+needs `scale_free_space`, scale_free.smk).
 
-config.diagnosis -> FE rays (one job per ray: results/diagnosis/rays/<ray>.parquet)
-  -> ray spaces (neo_hookean + one per cause: results/diagnosis/spaces/<model>.parquet)
+scale-free space (neo_hookean + one per cause: results/simulated_space/scale_free/)
   -> one diagnosis per measured file (results/diagnosis/<name>/report.json, .md, figures)
   -> direct FE runs at the diagnosed parameters (fe_check.csv) -> Figure 6
 measured file + the paper's space -> 100 neo-Hookean identifications -> Figure 5
-
-A ray is one FE curve at X1d = diagnosis.x1d_mpa.min; the scaling law
-M(s X1d, s X1h, s X2d, s p) = M(X1d, X1h, X2d, p) makes it cover every X1d of
-the search range (see skinsuction.diagnose._rays).  The rays of a cause at its
-null value are the neo-Hookean rays: the same jobs.
 """
 
-from skinsuction.diagnose._causes import BASELINE, registry_from_config  # noqa: E402
-from skinsuction.diagnose._rays import RAY_ID_PATTERN, RaySpec, rays_of  # noqa: E402
-
 DG = config["diagnosis"]
-try:
-    DG_CAUSES = registry_from_config(DG["causes"])
-    DG_SPEC = RaySpec.from_config(DG, config.get("mesh"))
-except (KeyError, ValueError) as err:
-    raise _config_error("diagnosis", err)
-DG_MODELS = {BASELINE: None, **DG_CAUSES}
-DG_RAYS = {name: [r["ray_id"] for r in rays_of(DG_SPEC, cause)] for name, cause in DG_MODELS.items()}
-DG_ALL_RAYS = sorted(set().union(*DG_RAYS.values()))
+if "scale_free_space" not in config:
+    raise _config_error("diagnosis", "needs a scale_free_space section (the space it reads)")
 DG_MEASURED = dict(DG["measured"])
 DG_CODE = code_hash("diagnose", "identify", "space.py", "measured.py", "provenance.py")
 DG_FIG_CODE = code_hash("diagnose", "identify", "figures", "space.py", "measured.py")
@@ -44,14 +30,10 @@ if DG["figure5"]["space"] not in SPACE_POINTS:
 
 
 wildcard_constraints:
-    ray=RAY_ID_PATTERN,
-    model="|".join(map(re.escape, DG_MODELS)),
     name="|".join(map(re.escape, DG_MEASURED)),
 
 
-DG_SPACES = expand("results/diagnosis/spaces/{model}.parquet", model=DG_MODELS)
 DIAGNOSIS_OUTPUTS = [
-    *DG_SPACES,
     *expand(
         "results/diagnosis/{name}/{file}",
         name=DG_MEASURED,
@@ -66,68 +48,15 @@ DIAGNOSIS_OUTPUTS = [
 ]
 
 
-localrules:
-    diagnosis_spaces,
-
-
-rule diagnosis_spaces:
-    """Target: every ray space of the diagnosis (what `skinsuction diagnose` reads)."""
-    input:
-        DG_SPACES,
-
-
 # The synthetic example of data/ is shipped, not made by the workflow (a rule
 # producing a tracked file reruns whenever its code changes); remake it by hand
 # with:  python -m skinsuction.diagnose.example data/example_suction_synthetic.csv
 
 
-rule simulate_ray:
-    output:
-        ray="results/diagnosis/rays/{ray}.parquet",
-    log:
-        "logs/diagnosis/rays/{ray}.log",
-    benchmark:
-        "results/benchmarks/diagnosis/rays/{ray}.tsv"
-    params:
-        # a change of any of these reruns the FE jobs (Snakemake's params trigger)
-        pressures=list(DG_SPEC.pressures_mbar),
-        mesh=DG_SPEC.mesh,
-        code=code_hash("model"),
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=30,
-    conda:
-        "../envs/skinsuction.yaml"
-    script:
-        "../scripts/simulate_ray.py"
-
-
-rule assemble_diagnosis_space:
-    input:
-        rays=lambda w: expand("results/diagnosis/rays/{ray}.parquet", ray=DG_RAYS[w.model]),
-    output:
-        space="results/diagnosis/spaces/{model}.parquet",
-    log:
-        "logs/diagnosis/spaces/{model}.log",
-    params:
-        spec=DG_SPEC.to_dict(),
-        cause=lambda w: DG["causes"].get(w.model),
-        code=code_hash("diagnose", "space.py", "provenance.py"),
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=10,
-    conda:
-        "../envs/skinsuction.yaml"
-    script:
-        "../scripts/assemble_diagnosis_space.py"
-
-
 rule diagnose_measured:
     input:
         measured=lambda w: DG_MEASURED[w.name],
-        spaces=DG_SPACES,
+        spaces=SF_SPACES,
     output:
         json=report(
             "results/diagnosis/{name}/report.json",
@@ -182,9 +111,9 @@ rule diagnosis_fe_check:
     benchmark:
         "results/benchmarks/diagnosis/fe_check_{name}.tsv"
     params:
-        mesh=DG_SPEC.mesh,
-        bottom=DG_SPEC.bottom,
-        causes=DG["causes"],
+        mesh=SF_SPEC.mesh,
+        bottom=SF_SPEC.bottom,
+        causes=SF["causes"],
         code=code_hash("model", "diagnose"),
     threads: 1
     resources:

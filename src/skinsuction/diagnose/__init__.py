@@ -3,14 +3,16 @@
 ``skinsuction diagnose MEASURED.csv --out DIR`` (:func:`command`):
 
 1. fits the two-layer neo-Hookean model (both probes jointly when both are
-   present) on the neo-Hookean ray space;
+   present) on the neo-Hookean scale-free space;
 2. tests its residuals for a systematic (smooth) pattern against the noise,
    estimated from replicates or from the data, and describes the pattern;
 3. fits each candidate cause of the registry (strain stiffening, dermis
    thickness, pre-tension, ...: one extra parameter each) on its extended ray
    space, with E, delta BIC and a cross-probe holdout;
 4. names the cause whose gain is decisive and that removes the misfit, or
-   ``none``;
+   ``none``; where the fit it stands on sits at an edge of the simulated space
+   the verdict is ``beyond_space`` (never ``none``), naming the parameter and
+   the configuration key that widens the space;
 5. writes ``DIR/report.json``, ``DIR/report.md`` and figures.
 
 ``report.json`` (other keys are added)::
@@ -19,7 +21,10 @@
      "baseline": {"model": "neo_hookean", "parameters": {"X1d", "X1h"}, "E_um",
                   "systematic_misfit", "description"},
      "candidates": [{"cause", "parameters", "E_um", "delta_bic", "holdout_E_um"}],
-     "cause": "none" | <cause>, "extended": {...} | null, "gain": {...} | null}
+     "cause": "none" | "beyond_space" | <cause>,
+     "verdict": "neo_hookean_fits" | "cause_found" | "unexplained_misfit" | "beyond_space",
+     "beyond_space": [{"model", "parameter", "side", "edge", "config_key", "value"}],
+     "extended": {...} | null, "gain": {...} | null}
 
 Parameters are in MPa (moduli), mm (thickness), 1 (lambda0); E is eq. 7 of the
 paper in µm on the concatenated fitted points.  See :mod:`._rays` for the ray
@@ -31,14 +36,20 @@ from ._cli import add_arguments, command
 from ._diagnose import DEFAULT_SPACE_DIR, Settings, diagnose, diagnose_file, prepare_data
 from ._fit import Fit, FitData, ModelCurves, fit_model
 from ._rays import (
+    BUNDLE_ID_PATTERN,
     RAY_ID_PATTERN,
+    NeoHookeanSlice,
     RayInterpolant,
     RaySpace,
     RaySpec,
     SpaceMissingError,
     assemble_ray_space,
     build_ray_spaces,
+    bundle_id,
+    compute_bundle,
     compute_ray,
+    coverage_frontier,
+    ray_bundles,
     parse_ray_id,
     ray_id,
     rays_of,
@@ -62,7 +73,9 @@ __all__ = [
     "DEFAULT_SPACE_DIR", "Settings", "diagnose", "diagnose_file", "prepare_data",
     "Fit", "FitData", "ModelCurves", "fit_model",
     "RAY_ID_PATTERN", "RayInterpolant", "RaySpace", "RaySpec", "SpaceMissingError",
-    "assemble_ray_space", "build_ray_spaces", "compute_ray", "parse_ray_id", "ray_id",
+    "assemble_ray_space", "build_ray_spaces", "compute_ray", "compute_bundle",
+    "coverage_frontier", "ray_bundles", "bundle_id", "BUNDLE_ID_PATTERN", "NeoHookeanSlice",
+    "parse_ray_id", "ray_id",
     "rays_of", "read_ray_space", "read_ray_spaces",
     "write_report",
     "bic", "misfit_test", "noise_from_differences", "noise_from_replicates",

@@ -35,6 +35,13 @@ import numpy as np
 __all__ = ["Cause", "NONE", "BASELINE", "registry_from_config", "default_registry",
            "DEFAULT_CAUSES"]
 
+#: Axis transforms of a cause coordinate c: (c -> u, u -> c).
+SCALES = {
+    "linear": (lambda c: c, lambda u: u),
+    "log": (np.log10, lambda u: 10.0 ** u),
+    "log1p": (lambda c: np.log10(1.0 + c), lambda u: 10.0 ** u - 1.0),
+}
+
 #: Name of the verdict "the neo-Hookean model explains the data".
 NONE = "none"
 #: Name of the baseline model (and of its ray space).
@@ -68,6 +75,10 @@ class Cause:
         The physical hypothesis, one sentence.
     description : str
         What the parameter is, for reports.
+    scale : {"linear", "log", "log1p"}
+        Axis on which the nodes are interpolated and the fit searches:
+        ``u = c``, ``u = log10 c`` or ``u = log10(1 + c)`` (a log-like axis that
+        keeps 0: X2d/X1d from 0 to 1000 on nearly even steps).
     """
 
     name: str
@@ -80,6 +91,7 @@ class Cause:
     hypothesis: str = ""
     description: str = ""
     coordinate_name: str = field(default="")
+    scale: str = "linear"
 
     def __post_init__(self):
         nodes = tuple(float(v) for v in self.nodes)
@@ -91,6 +103,13 @@ class Cause:
         if not any(np.isclose(self.neutral, v, rtol=0, atol=1e-12) for v in nodes):
             raise ValueError(f"cause {self.name!r}: the neutral value {self.neutral:g} (baseline "
                              f"model) must be one of the nodes {list(nodes)}")
+        if self.scale not in SCALES:
+            raise ValueError(f"cause {self.name!r}: scale must be one of {sorted(SCALES)}, "
+                             f"got {self.scale!r}")
+        if self.scale == "log" and nodes[0] <= 0:
+            raise ValueError(f"cause {self.name!r}: a log scale needs positive nodes")
+        if self.scale == "log1p" and nodes[0] <= -1:
+            raise ValueError(f"cause {self.name!r}: a log1p scale needs nodes above -1")
         if self.name in (NONE, BASELINE):
             raise ValueError(f"{self.name!r} is reserved and cannot name a cause")
         if not self.coordinate_name:
@@ -104,6 +123,21 @@ class Cause:
     @property
     def upper(self) -> float:
         return self.nodes[-1]
+
+    def to_axis(self, coordinate):
+        """Interpolation/search axis ``u`` of a ray coordinate (see ``scale``)."""
+        c = np.asarray(coordinate, dtype=float)
+        u = SCALES[self.scale][0](c)
+        return float(u) if np.ndim(u) == 0 else u
+
+    def from_axis(self, u):
+        """Ray coordinate of an axis value (inverse of :meth:`to_axis`)."""
+        c = SCALES[self.scale][1](np.asarray(u, dtype=float))
+        return float(c) if np.ndim(c) == 0 else c
+
+    @property
+    def axis_nodes(self) -> np.ndarray:
+        return np.asarray(self.to_axis(np.asarray(self.nodes)), dtype=float)
 
     def value(self, coordinate, x1d):
         """Parameter value (in ``unit``) of a ray coordinate at a given X1d (MPa)."""
@@ -134,22 +168,22 @@ class Cause:
 #: Built-in registry, the same as ``diagnosis.causes`` of config/config.yaml.
 DEFAULT_CAUSES = {
     "strain_stiffening": dict(
-        keyword="x2d", symbol="X2d", unit="MPa", modulus=True, neutral=0.0,
-        nodes=[0.0, 2.0, 4.0, 8.0, 16.0, 32.0],
+        keyword="x2d", symbol="X2d", unit="MPa", modulus=True, neutral=0.0, scale="log1p",
+        nodes=[0.0, 1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0],
         hypothesis="the dermis stiffens faster with strain than neo-Hookean (collagen "
                    "recruitment): W = X1 (I1 - 3) + X2 (I1 - 3)^2 (paper eq. 9)",
         description="second-order modulus X2 of the dermis (MPa)",
     ),
     "dermis_thickness": dict(
-        keyword="t_d", symbol="t_d", unit="mm", modulus=False, neutral=1.0,
-        nodes=[0.5, 0.75, 1.0, 1.5, 2.0, 2.5],
+        keyword="t_d", symbol="t_d", unit="mm", modulus=False, neutral=1.0, scale="log",
+        nodes=[0.4, 0.6, 1.0, 1.5, 2.2, 3.0],
         hypothesis="the dermis is not 1 mm thick (in vivo about 0.5-2.5 mm with site "
                    "and age)",
         description="thickness of the dermis with the epidermis (mm)",
     ),
     "pre_tension": dict(
         keyword="prestretch", symbol="lambda0", unit="1", modulus=False, neutral=1.0,
-        nodes=[1.0, 1.03, 1.06, 1.09, 1.12],
+        nodes=[1.0, 1.05, 1.1, 1.15, 1.2, 1.25],
         hypothesis="the skin is under natural in-plane tension before the probe is "
                    "glued (reported initial stresses around 10 kPa)",
         description="equibiaxial in-plane pre-stretch lambda0 of both layers",

@@ -27,9 +27,9 @@ def models_of_figure6(report: dict):
     b = report["baseline"]
     out = [("neo-Hookean", "neo_hookean", b["parameters"], None)]
     cands = sorted(report["candidates"], key=lambda c: c["bic"])
-    if report["cause"] != "none":
-        c = next(c for c in cands if c["cause"] == report["cause"])
-        out.append((f"extended: {c['cause']}", c["cause"], c["parameters"], c))
+    named = next((c for c in cands if c["cause"] == report["cause"]), None)
+    if named is not None and report.get("extended"):
+        out.append((f"extended: {named['cause']}", named["cause"], named["parameters"], named))
     elif cands:
         c = cands[0]
         out.append((f"best candidate, not retained: {c['cause']}", c["cause"],

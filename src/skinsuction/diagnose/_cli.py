@@ -47,10 +47,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder: report.json, report.md, fit.png/pdf, "
                         "residuals.png/pdf, gain.png/pdf")
-    p.add_argument("--space-dir", default=DEFAULT_SPACE_DIR, metavar="DIR",
-                   help="folder of the ray spaces built by the workflow "
+    p.add_argument("--space", "--space-dir", dest="space_dir", default=DEFAULT_SPACE_DIR,
+                   metavar="DIR",
+                   help="folder of the scale-free simulated space built by the workflow "
                         f"(neo_hookean.parquet and one file per cause; default {DEFAULT_SPACE_DIR}; "
-                        "build with `snakemake --cores 2 diagnosis_spaces`)")
+                        "build with `snakemake --cores 2 scale_free_space`)")
     p.add_argument("--noise-um", type=positive, default=None, metavar="UM",
                    help="noise sd of one measured deflection in µm, if known (default: "
                         "estimated from replicate curves, or from the curves' differences)")

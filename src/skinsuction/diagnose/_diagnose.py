@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from ._causes import BASELINE, NONE
-from ._fit import PAPER_WF, FitData, fit_model
+from ._fit import PAPER_WF, FitData, fit_bounds, fit_model
 from ._stats import (
     NoiseEstimate,
     bic,
@@ -55,8 +55,11 @@ from ._stats import (
 
 __all__ = ["Settings", "diagnose", "diagnose_file", "prepare_data", "DEFAULT_SPACE_DIR"]
 
+#: Cause and verdict where the best fit sits at an edge of the simulated space.
+BEYOND_SPACE = "beyond_space"
+
 #: Where the workflow writes the ray spaces (``--space-dir`` default).
-DEFAULT_SPACE_DIR = "results/diagnosis/spaces"
+DEFAULT_SPACE_DIR = "results/simulated_space/scale_free"
 
 
 @dataclass(frozen=True)
@@ -255,6 +258,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     base_test = misfit_test(_residual_dict(base, fd), sigma, noise.dof, settings.degree,
                             settings.alpha)
     base_bic = bic(base.chi2, base.n_params, n_points)
+    base_bounds = fit_bounds(base_space, fd, base.theta)
     two_probes = len(probes) >= 2 and settings.holdout
     base_hold, base_hold_detail = (_holdout(base_space, fd, settings, next(seeds))
                                    if two_probes else (None, None))
@@ -267,7 +271,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         if not all(space.has_probe(p) for p in probes):
             continue
         cause = space.cause
-        null_theta = np.array([*base.theta, cause.neutral])
+        null_theta = np.array([*base.theta, cause.to_axis(cause.neutral)])
         f = fit_model(space, fd, seed=next(seeds), repeats=settings.repeats,
                       window_focusing_options=settings.window_focusing, starts=[null_theta])
         t = misfit_test(_residual_dict(f, fd), sigma, noise.dof, settings.degree,
@@ -276,6 +280,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         hold, hold_detail = (_holdout(space, fd, settings, next(seeds))
                              if two_probes else (None, None))
         fits[name], tests[name] = f, t
+        bounds = fit_bounds(space, fd, f.theta)
         candidates.append({
             "cause": name,
             "hypothesis": cause.hypothesis,
@@ -293,11 +298,12 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
             "removes_misfit": not t.significant,
             "extra_parameter": {"symbol": cause.symbol, "unit": cause.unit,
                                 "value": f.parameters[cause.symbol],
-                                "coordinate": float(f.theta[2]),
+                                "coordinate": float(cause.from_axis(f.theta[2])),
                                 "coordinate_name": cause.coordinate_name,
                                 "range": [cause.lower, cause.upper],
-                                "at_bound": bool(np.isclose(f.theta[2], cause.lower)
-                                                 or np.isclose(f.theta[2], cause.upper))},
+                                "at_bound": bounds[cause.symbol]["at_bound"]
+                                and not bounds[cause.symbol]["neutral"]},
+            "at_bound": bounds,
             "fit": _fit_json(f, t),
             "holdout": hold_detail,
         })
@@ -314,6 +320,21 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     else:
         best, cause, ambiguous = None, NONE, []
         verdict = "unexplained_misfit" if base_test.significant else "neo_hookean_fits"
+    # never a silent bound: the model the verdict stands on (the named cause, else the
+    # lowest BIC of all) must not sit at an edge of the simulated space
+    if best is not None:
+        standing = (best["cause"], best["at_bound"])
+    else:
+        lowest = min(candidates, key=lambda c: c["bic"], default=None)
+        standing = ((lowest["cause"], lowest["at_bound"])
+                    if lowest is not None and lowest["bic"] < base_bic
+                    else (BASELINE, base_bounds))
+    beyond = [{"model": standing[0], **f} for f in standing[1].values()
+              if f["at_bound"] and not f["neutral"]]
+    if beyond:
+        verdict = "beyond_space"
+        if cause == NONE:
+            cause = standing[0] if standing[0] != BASELINE else BEYOND_SPACE
     ranked = sorted(candidates, key=lambda c: c["bic"])
     runner_up = next((c for c in ranked if best is not None and c is not best), None)
 
@@ -336,6 +357,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
             "bic": base_bic,
             "holdout_E_um": base_hold,
             "holdout": base_hold_detail,
+            "at_bound": base_bounds,
             **{k: v for k, v in _fit_json(base, base_test).items() if k != "parameters"},
         },
         "data": {f"{p:g}": {"pressure_mbar": fd[p].pressure_mbar.tolist(),
@@ -344,6 +366,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         "candidates": candidates,
         "cause": cause,
         "verdict": verdict,
+        "beyond_space": beyond,
         "extended": ({"cause": best["cause"], "parameters": best["parameters"],
                       "E_um": best["E_um"]} if best else None),
         "gain": ({"E_ratio": best["E_ratio"], "delta_bic": best["delta_bic"],
@@ -356,6 +379,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         "summary": None,
         "settings": {**asdict(settings), "n_points": n_points},
         "spaces": {name: {"x1d_range_mpa": list(s.spec.x1d_range),
+                          "load_max_mbar_per_mpa": s.spec.load_max,
                           "x1h_over_x1d_range": [s.spec.ratio_nodes[0], s.spec.ratio_nodes[-1]],
                           "coordinate_range": ([s.cause.lower, s.cause.upper]
                                                if s.cause else None),
@@ -381,12 +405,27 @@ def _params_text(params):
     return ", ".join(out)
 
 
+def _beyond_text(report: dict) -> str:
+    parts = []
+    for f in report.get("beyond_space") or []:
+        where = ("the end of the simulated window" if f["edge"] == "window"
+                 else "the coverage frontier, where the FE rays stop")
+        parts.append(f"{f['parameter']} = {f['value']:.3g} of the {f['model']} fit is at the "
+                     f"{f['side']} edge ({where}); widen {f['config_key']}")
+    return ("BEYOND THE SIMULATED SPACE: " + "; ".join(parts) + ". The values at the edge are "
+            "bounds, not estimates. ") if parts else ""
+
+
 def summary_text(report: dict) -> str:
     """The verdict in two or three plain sentences."""
     b = report["baseline"]
     s = (f"Neo-Hookean fit: {_params_text(b['parameters'])}, E = {b['E_um']:.3g} µm "
          f"(noise {report['noise_um']:.2g} µm per point, {report['noise']['method']}). ")
-    if report["cause"] == NONE:
+    s += _beyond_text(report)
+    if report["cause"] == BEYOND_SPACE:
+        return s + "No cause can be named until the space covers the fit."
+    if report["cause"] == NONE or report["cause"] not in {
+            c["cause"] for c in report["candidates"]}:
         if report["verdict"] == "unexplained_misfit":
             s += ("The neo-Hookean model misses a systematic pattern, but no candidate cause "
                   "removes it while earning its extra parameter: cause none "
@@ -397,6 +436,9 @@ def summary_text(report: dict) -> str:
         return s
     c = next(c for c in report["candidates"] if c["cause"] == report["cause"])
     g = report["gain"]
+    if g is None:  # the lowest BIC, at an edge, without earning its parameter
+        return s + (f"Best candidate: {c['cause']} (delta BIC {c['delta_bic']:.1f}), at the "
+                    "edge of the space: no cause named.")
     hyp = f" ({c['hypothesis']})" if c.get("hypothesis") else ""
     s += (f"Cause: {c['cause']}{hyp}. Extended fit: "
           f"{_params_text(c['parameters'])}, E = {c['E_um']:.3g} µm "
@@ -427,9 +469,12 @@ def diagnose_file(measured_path, space_dir=DEFAULT_SPACE_DIR, settings: Settings
     if spaces is None:
         spaces = read_ray_spaces(space_dir)
     base = spaces[BASELINE]
-    p_hi = base.spec.pressures_mbar[-1]
+    sp = base.spec
     data = load_measured(measured_path, available_probes=list(base.probes_mm),
-                         pressure_range_mbar=(0.0, p_hi))
+                         pressure_range_mbar=(0.0, sp.reach_mbar()),
+                         range_note=(f"the reach of the scale-free space: p/X1d <= "
+                                     f"{sp.load_max:g} mbar/MPa up to X1d = "
+                                     f"{sp.x1d_range[1]:g} MPa"))
     source = {"file": str(measured_path), "sha256": file_sha256(measured_path),
               "space_dir": str(space_dir) if space_dir is not None else None}
     return diagnose(data, spaces, settings, source=source)

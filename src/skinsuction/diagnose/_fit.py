@@ -1,8 +1,8 @@
 """Fit a model (neo-Hookean or one cause) on its ray space: window focusing, then polish.
 
 The parameters searched are ``theta = (log10 X1d, log10 r[, c])`` with
-``r = X1h / X1d`` and ``c`` the ray coordinate of the cause (see
-:mod:`._rays`): the window focusing of the paper (section 2.4, N = 1000,
+``r = X1h / X1d`` and ``u`` the axis coordinate of the cause (its ray
+coordinate on the cause's scale, :meth:`Cause.to_axis`; see :mod:`._rays`): the window focusing of the paper (section 2.4, N = 1000,
 Nb = 20) samples uniformly in the box of the space, which in logarithms covers
 decades of moduli evenly.  The cost is ``chi^2 / 2`` with the noise level of
 each point, so both probes weigh by their noise.  The best of ``repeats``
@@ -19,11 +19,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from skinsuction.identify import IdentificationError, window_focusing
+from skinsuction.identify import IdentificationError, bound_flags, window_focusing
 
 from ._rays import RayInterpolant, RaySpace
 
-__all__ = ["FitData", "Fit", "ModelCurves", "fit_model", "PAPER_WF"]
+__all__ = ["FitData", "Fit", "ModelCurves", "fit_model", "fit_bounds", "PAPER_WF"]
 
 #: Window focusing settings of the paper (section 2.4); C in units of sqrt(chi^2/n).
 PAPER_WF = {"n_samples": 1000, "n_best": 20, "tolerance": 1e-6, "max_iter": 200}
@@ -63,7 +63,7 @@ class ModelCurves:
         out = {"X1d": float(x1d), "X1h": float(x1d * 10.0 ** theta[1])}
         cause = self.space.cause
         if cause is not None:
-            out[cause.symbol] = float(cause.value(theta[2], x1d))
+            out[cause.symbol] = float(cause.value(cause.from_axis(theta[2]), x1d))
         return out
 
 
@@ -195,3 +195,36 @@ def fit_model(space: RaySpace, data: dict, *, seed=0, repeats: int = 2,
             "chi2_runs": [2 * float(c) for c in costs[: len(runs)]],
             "polished": n_polished, "settings": wf, "repeats": int(repeats)}
     return evaluate_fit(model, best, space.name, info)
+
+
+def fit_bounds(space: RaySpace, data: dict, theta) -> dict:
+    """``{parameter: flag}``: which fitted parameters sit at an edge of the space.
+
+    See :func:`skinsuction.identify.bound_flags`; each flag names the
+    configuration key that widens the space there.  A cause's parameter at its
+    neutral end (e.g. X2d = 0) is the baseline model, not an edge: its flag has
+    ``neutral: True``.
+    """
+    model = ModelCurves(space, data)
+    obj = _Objective(model)
+    spec, cause = space.spec, space.cause
+    raised = model.lower[0] > math.log10(spec.x1d_range[0]) + 1e-12
+    x1d_lo = ("scale_free_space.load.max (the largest measured pressure over load.max sets "
+              "the lowest X1d)" if raised else "scale_free_space.x1d_mpa.min")
+    names, kinds = ["X1d", "X1h"], ["log", "log"]
+    keys = [(x1d_lo, "scale_free_space.x1d_mpa.max"),
+            ("scale_free_space.ratio", "scale_free_space.ratio")]
+    if cause is not None:
+        names.append(cause.symbol)
+        kinds.append("axis")
+        keys.append((f"scale_free_space.causes.{cause.name}.nodes",) * 2)
+    flags = bound_flags(obj, theta, names, kinds, keys)
+    params = model.parameters(np.asarray(theta, dtype=float))
+    for f in flags:
+        f["value"] = params[f["parameter"]]
+        f["neutral"] = False
+    if cause is not None:
+        f = flags[-1]
+        end = cause.nodes[0] if f["side"] == "lower" else cause.nodes[-1]
+        f["neutral"] = bool(f["edge"] == "window" and end == cause.neutral)
+    return {f["parameter"]: f for f in flags}

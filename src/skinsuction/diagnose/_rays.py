@@ -58,6 +58,7 @@ from skinsuction.space import (
     parse_point_id,
     point_id,
     round_sig,
+    solve_with_fallbacks,
 )
 
 from ._causes import BASELINE, Cause
@@ -72,7 +73,13 @@ __all__ = [
     "parse_ray_id",
     "RAY_ID_PATTERN",
     "rays_of",
+    "ray_bundles",
+    "bundle_id",
+    "BUNDLE_ID_PATTERN",
     "compute_ray",
+    "compute_bundle",
+    "coverage_frontier",
+    "NeoHookeanSlice",
     "assemble_ray_space",
     "read_ray_space",
     "read_ray_spaces",
@@ -135,28 +142,41 @@ def parse_ray_id(rid: str) -> dict:
 # ---------------------------------------------------------------- ray specification
 @dataclass(frozen=True)
 class RaySpec:
-    """Where and how the rays of the diagnosis are run.
+    """The scale-free simulated space: where and how its rays are run.
 
     Attributes
     ----------
     probes_mm : tuple of float
-    x1d_range : (float, float)
-        Search range of X1d (MPa); rays run at ``x1d_range[0]``.
     ratio_nodes : tuple of float
         Nodes of r = X1h / X1d (ascending, > 0), interpolated in log10 r.
-    pressures_mbar : tuple of float
-        Pressures of every ray (mbar, from 0).
+    load_max : float
+        Largest load p / X1d of a ray (mbar/MPa); a measured curve up to
+        ``p_max`` reaches X1d down to ``p_max / load_max``.
+    load_steps : int
+        Load steps of a ray: nodes ``0, load_max / load_steps, ..., load_max``.
+    x1d_range : (float, float)
+        Search window of X1d (MPa) of the fits; its lower end is raised to
+        ``p_max / load_max`` for a curve up to ``p_max``.
+    x1d_ref : float
+        X1d at which the rays are run (MPa); any value gives the same space (the
+        scaling law), it only sets the pressures of the FE runs.
     bottom : str
     mesh : dict
         Mesh settings passed to the model.
+    fallback : tuple of dict
+        Fallback meshes for a ray that stops early (see
+        :func:`skinsuction.space.solve_with_fallbacks`).
     """
 
     probes_mm: tuple
-    x1d_range: tuple
     ratio_nodes: tuple
-    pressures_mbar: tuple
+    load_max: float
+    load_steps: int = 40
+    x1d_range: tuple = (0.001, 1.0)
+    x1d_ref: float = 0.01
     bottom: str = "fixed"
     mesh: dict = field(default_factory=dict)
+    fallback: tuple = ()
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -165,41 +185,70 @@ class RaySpec:
         if not 0 < lo < hi:
             raise ValueError(f"x1d range must be 0 < min < max, got {lo}, {hi}")
         set_(self, "x1d_range", (lo, hi))
-        r = tuple(sorted(float(x) for x in self.ratio_nodes))
+        r = tuple(sorted(round_sig(float(x)) for x in self.ratio_nodes))
         if len(r) < 2 or r[0] <= 0 or len(set(r)) != len(r):
             raise ValueError(f"ratio nodes must be >= 2 distinct positive values, got {r}")
         set_(self, "ratio_nodes", r)
-        p = tuple(float(x) for x in self.pressures_mbar)
-        if p[0] != 0 or np.any(np.diff(p) <= 0):
-            raise ValueError("ray pressures must start at 0 and increase")
-        set_(self, "pressures_mbar", p)
+        if not float(self.load_max) > 0:
+            raise ValueError(f"load_max must be positive, got {self.load_max}")
+        set_(self, "load_max", float(self.load_max))
+        if int(self.load_steps) < 3 or int(self.load_steps) != self.load_steps:
+            raise ValueError(f"load_steps must be a whole number >= 3, got {self.load_steps}")
+        set_(self, "load_steps", int(self.load_steps))
+        if not float(self.x1d_ref) > 0:
+            raise ValueError(f"x1d_ref must be positive, got {self.x1d_ref}")
+        set_(self, "x1d_ref", float(self.x1d_ref))
         set_(self, "mesh", dict(self.mesh or {}))
+        fb = self.fallback
+        fb = [fb] if isinstance(fb, dict) else list(fb or [])
+        set_(self, "fallback", tuple(dict(f) for f in fb))
 
     @property
-    def x1d_ref(self) -> float:
-        return self.x1d_range[0]
+    def load_nodes(self) -> np.ndarray:
+        """The loads p / X1d of a ray (mbar/MPa)."""
+        return np.linspace(0.0, self.load_max, self.load_steps + 1)
+
+    @property
+    def pressures_mbar(self) -> tuple:
+        """Pressures of the FE runs (at ``x1d_ref``), mbar."""
+        return tuple(round_sig(float(q) * self.x1d_ref) for q in self.load_nodes)
+
+    def x1d_lower(self, p_max_mbar: float) -> float:
+        """Lowest X1d (MPa) searched for a curve up to ``p_max_mbar``."""
+        return max(self.x1d_range[0], float(p_max_mbar) / self.load_max)
+
+    def reach_mbar(self) -> float:
+        """Highest pressure any X1d of the window can be read at (mbar)."""
+        return self.load_max * self.x1d_range[1]
 
     @classmethod
-    def from_config(cls, diag: dict, study_mesh: dict | None = None) -> "RaySpec":
-        """From the ``diagnosis`` section (axis forms allowed); mesh = study mesh updated
-        by ``diagnosis.mesh``."""
+    def from_config(cls, section: dict, study_mesh: dict | None = None,
+                    study_fallback=None) -> "RaySpec":
+        """From the ``scale_free_space`` section (axis forms allowed); mesh = study mesh
+        updated by its ``mesh``; fallbacks = its ``mesh_fallback`` or the study's."""
         from skinsuction.space import expand_axis
 
-        mesh = {**(study_mesh or {}), **(diag.get("mesh") or {})}
+        mesh = {**(study_mesh or {}), **(section.get("mesh") or {})}
+        load = section.get("load", {})
+        fallback = section.get("mesh_fallback", study_fallback)
         return cls(
-            probes_mm=expand_axis(diag.get("probes_mm", [2, 6])),
-            x1d_range=(diag["x1d_mpa"]["min"], diag["x1d_mpa"]["max"]),
-            ratio_nodes=expand_axis(diag["ratio"]),
-            pressures_mbar=expand_axis(diag["pressures_mbar"]),
-            bottom=diag.get("bottom", "fixed"),
+            probes_mm=expand_axis(section.get("probes_mm", [2, 6])),
+            ratio_nodes=expand_axis(section["ratio"]),
+            load_max=load["max"],
+            load_steps=load.get("steps", 40),
+            x1d_range=(section["x1d_mpa"]["min"], section["x1d_mpa"]["max"]),
+            x1d_ref=section.get("x1d_ref", 0.01),
+            bottom=section.get("bottom", "fixed"),
             mesh=mesh,
+            fallback=fallback or (),
         )
 
     def to_dict(self) -> dict:
-        return {"probes_mm": list(self.probes_mm), "x1d_range": list(self.x1d_range),
-                "ratio_nodes": list(self.ratio_nodes),
-                "pressures_mbar": list(self.pressures_mbar), "bottom": self.bottom,
-                "mesh": dict(self.mesh)}
+        return {"probes_mm": list(self.probes_mm), "ratio_nodes": list(self.ratio_nodes),
+                "load_max": self.load_max, "load_steps": self.load_steps,
+                "x1d_range": list(self.x1d_range), "x1d_ref": self.x1d_ref,
+                "bottom": self.bottom, "mesh": dict(self.mesh),
+                "fallback": [dict(f) for f in self.fallback]}
 
 
 def _ray_params(spec: RaySpec, probe: float, ratio: float, cause: Cause | None, coord) -> dict:
@@ -229,48 +278,76 @@ def rays_of(spec: RaySpec, cause: Cause | None = None) -> list[dict]:
     return out
 
 
-# ---------------------------------------------------------------------- FE rays
-def compute_ray(rid: str, path, pressures_mbar, mesh: dict | None = None, metadata=None):
-    """Run the FE model for the ray ``rid`` and write its curve file (atomic Parquet).
+#: Snakemake wildcard constraint of a bundle id.
+BUNDLE_ID_PATTERN = r"[a-z][a-z0-9_]*__p[0-9.]+__r[0-9.e+-]+"
 
-    The adapter of the workflow's ``simulate_ray`` rule.  Like
-    :func:`skinsuction.space.compute_point`: a stopped solve is written as it is,
-    an exception of the model is logged and written as a failed ray.
+
+def bundle_id(model: str, probe_mm: float, ratio: float) -> str:
+    """Name of the bundle of rays of one model at one (probe, X1h/X1d).
+
+    >>> bundle_id("pre_tension", 6.0, 0.001)
+    'pre_tension__p6__r0.001'
     """
-    from skinsuction.model import Curve, simulate
-    from skinsuction.provenance import collect
+    return f"{model}__p{_fmt(probe_mm)}__r{_fmt(round_sig(ratio))}"
 
+
+def ray_bundles(spec: RaySpec, causes: dict) -> dict:
+    """``{bundle_id: [ray_id, ...]}``: the FE jobs of the space.
+
+    One bundle per (model, probe, X1h/X1d): the neo-Hookean bundle holds the
+    neutral ray, a cause's bundle its other nodes, so every ray is run once and
+    adding a cause adds bundles without touching the others.
+    """
+    out = {}
+    for name, cause in {BASELINE: None, **causes}.items():
+        for ray in rays_of(spec, cause):
+            if cause is not None and ray["coordinate"] == cause.neutral:
+                continue
+            key = bundle_id(name, ray["probe_mm"], ray["ratio"])
+            out.setdefault(key, []).append(ray["ray_id"])
+    return out
+
+
+# ---------------------------------------------------------------------- FE rays
+def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=None):
+    """Run the FE model (and its fallbacks) for the ray ``rid``: (Curve, frame, info)."""
     params = parse_ray_id(rid)
-    pressures = np.asarray(pressures_mbar, dtype=float)
     extras = {k: params[k] for k in EXTRA_KEYWORDS if params[k] != EXTRA_KEYWORDS[k]}
     axes = {k: params[k] for k in AXES}
-    log.info("ray %s: %s %s, %d pressures, mesh %s", rid, axes, extras, pressures.size, mesh)
-    start = time.perf_counter()
-    try:
-        curve = simulate(**axes, **extras, pressures_mbar=pressures, mesh=dict(mesh or {}))
-    except TypeError as err:
-        if extras and "unexpected keyword" in str(err):
-            raise RuntimeError(f"ray {rid}: the model has no option {sorted(extras)} "
-                               f"({err}); update skinsuction.model") from err
-        raise
-    except Exception as err:  # the model promises not to raise; record it if it does
-        log.exception("the model raised at ray %s", rid)
-        curve = Curve(pressure_mbar=pressures, deflection_mm=np.full(pressures.shape, np.nan),
-                      converged=False, last_converged_mbar=float("nan"),
-                      reason=f"exception: {type(err).__name__}: {err}",
-                      seconds=time.perf_counter() - start)
-    log.info("ray %s: converged=%s last=%s mbar reason=%r newton=%s %.1f s", rid,
-             curve.converged, curve.last_converged_mbar, curve.reason,
-             curve.newton_iterations, curve.seconds)
+    curve, kept, first_reason = solve_with_fallbacks({**axes, **extras}, pressures_mbar, mesh,
+                                                     fallback, label=f"ray {rid}")
     frame = curve_frame(curve, axes)
     for k in EXTRA_KEYWORDS:
         frame[k] = float(params[k])
-    frame = frame.rename(columns={"point_id": "ray_id"})
+    frame = frame.drop(columns=["point_id"], errors="ignore")
     frame["ray_id"] = rid
-    meta = {"ray_id": rid, "params": params, "curve_info": dict(curve.info or {}),
-            "mesh": mesh, "provenance": collect(), **(metadata or {})}
-    _write_parquet(frame, path, meta)
-    return curve
+    info = {"converged": bool(curve.converged),
+            "last_converged_mbar": float(curve.last_converged_mbar),
+            "reason": str(curve.reason or ""), "newton_iterations": int(curve.newton_iterations or 0),
+            "seconds": float(curve.seconds or 0.0), "mesh_fallback": int(kept),
+            "first_solve_reason": first_reason, "curve_info": dict(curve.info or {})}
+    return curve, frame, info
+
+
+def compute_bundle(ray_ids, path, pressures_mbar, mesh: dict | None = None, fallback=None,
+                   metadata=None) -> dict:
+    """Run the rays of one bundle and write them to one file (atomic Parquet).
+
+    The adapter of the workflow's ``simulate_ray_bundle`` rule.  A ray that stops
+    early is written as it is (NaN beyond its last converged pressure), with its
+    reason; an exception of the model becomes a failed ray, never a missing one.
+    """
+    from skinsuction.provenance import collect
+
+    frames, infos = [], {}
+    for rid in ray_ids:
+        _, frame, info = compute_ray(rid, pressures_mbar, mesh, fallback)
+        frames.append(frame)
+        infos[rid] = info
+    meta = {"rays": infos, "mesh": mesh, "mesh_fallback": fallback, "provenance": collect(),
+            **(metadata or {})}
+    _write_parquet(pd.concat(frames, ignore_index=True), path, meta)
+    return infos
 
 
 # ------------------------------------------------------------------- ray spaces
@@ -335,59 +412,96 @@ class RaySpace:
         return pd.concat(rows, ignore_index=True)
 
 
-def assemble_ray_space(ray_paths, out_path, spec: RaySpec, cause: Cause | None,
-                       config: dict | None = None) -> RaySpace:
-    """Assemble the ray files of one model into its space file (atomic Parquet).
+def _last_reached(rays: np.ndarray, loads: np.ndarray) -> np.ndarray:
+    """Highest load with a finite deflection along the last axis (0 if none)."""
+    finite = np.isfinite(rays)
+    # a ray is a prefix of finite values: its reach is the last finite node
+    idx = finite.shape[-1] - 1 - np.argmax(finite[..., ::-1], axis=-1)
+    return np.where(finite.any(axis=-1), loads[idx], 0.0)
 
-    Every ray of :func:`rays_of` must be among ``ray_paths`` (extra files are
-    ignored); rays that stopped early keep their NaN tail.
+
+def coverage_frontier(space: "RaySpace") -> pd.DataFrame:
+    """The highest load p/X1d each ray reached, one row per (probe, ratio, coordinate).
+
+    Columns: ``model, probe_mm, ratio, coordinate, load_reached, load_max,
+    complete, reason, mesh_fallback, ray_id``.  ``complete`` is True where the ray
+    reaches ``load_max``; ``reason`` is the solver's reason where it stopped.
+    """
+    loads = space.spec.load_nodes
+    solver = space.metadata.get("rays", {})
+    ids = {(r["probe_mm"], r["ratio"], r["coordinate"] if space.cause else None): r["ray_id"]
+           for r in rays_of(space.spec, space.cause)}
+    rows = []
+    for probe, a in sorted(space.deflection_mm.items()):
+        reach = _last_reached(a, loads)
+        for i, r in enumerate(space.spec.ratio_nodes):
+            for j, c in enumerate(space.coordinates):
+                rid = ids.get((probe, r, c if space.cause else None), "")
+                info = solver.get(rid, {})
+                rows.append({"model": space.name, "probe_mm": probe, "ratio": r,
+                             "coordinate": c, "load_reached": float(reach[i, j]),
+                             "load_max": space.spec.load_max,
+                             "complete": bool(reach[i, j] >= space.spec.load_max * (1 - 1e-9)),
+                             "reason": info.get("reason", ""),
+                             "mesh_fallback": int(info.get("mesh_fallback", 0) or 0),
+                             "ray_id": rid})
+    return pd.DataFrame(rows)
+
+
+def assemble_ray_space(bundle_paths, out_path, spec: RaySpec, cause: Cause | None,
+                       config: dict | None = None) -> RaySpace:
+    """Assemble the bundle files of one model into its space file (atomic Parquet).
+
+    Every ray of :func:`rays_of` must be in one of ``bundle_paths`` (extra rays
+    are ignored); rays that stopped early keep their NaN tail, and the coverage
+    frontier (:func:`coverage_frontier`) goes into the metadata.
     """
     from skinsuction.provenance import collect
 
-    by_id = {}
-    solver = {}
-    for path in ray_paths:
+    by_id, solver = {}, {}
+    for path in bundle_paths:
         frame, meta = _read_parquet(path)
-        rid = meta.get("ray_id") or frame["ray_id"].iloc[0]
-        by_id[rid] = frame
-        solver[rid] = {"converged": bool(frame["converged"].iloc[0]),
-                       "last_converged_mbar": float(frame["last_converged_mbar"].iloc[0]),
-                       "reason": str(frame["reason"].iloc[0]),
-                       "newton_iterations": int(frame["newton_iterations"].iloc[0]),
-                       "seconds": float(frame["seconds"].iloc[0])}
+        for rid, g in frame.groupby("ray_id", sort=False):
+            by_id[rid] = g
+            solver[rid] = (meta.get("rays") or {}).get(rid, {})
     p = np.asarray(spec.pressures_mbar)
     rays = rays_of(spec, cause)
     coords = np.array(cause.nodes if cause is not None else [math.nan])
     arrays = {probe: np.full((len(spec.ratio_nodes), coords.size, p.size), np.nan)
               for probe in spec.probes_mm}
+    name = cause.name if cause else BASELINE
     for ray in rays:
         frame = by_id.get(ray["ray_id"])
         if frame is None:
-            raise ValueError(f"ray {ray['ray_id']} of the {cause.name if cause else BASELINE} "
-                             "space is missing from the inputs")
+            raise ValueError(f"ray {ray['ray_id']} of the {name} space is missing from the "
+                             "inputs")
         fp = frame["pressure_mbar"].to_numpy(float)
         if fp.shape != p.shape or not np.allclose(fp, p):
-            raise ValueError(f"ray {ray['ray_id']}: pressures differ from the specification")
+            raise ValueError(f"ray {ray['ray_id']}: pressures differ from the specification "
+                             "(rebuild the rays)")
         i = spec.ratio_nodes.index(ray["ratio"])
         j = 0 if cause is None else cause.nodes.index(ray["coordinate"])
         arrays[ray["probe_mm"]][i, j] = frame["deflection_mm"].to_numpy(float)
-    n_failed = sum(1 for r in rays if not solver[r["ray_id"]]["converged"])
-    meta = collect(config=config, space=cause.name if cause else BASELINE,
+    ray_info = {r["ray_id"]: solver[r["ray_id"]] for r in rays}
+    n_failed = sum(1 for r in ray_info.values() if not r.get("converged", False))
+    space = RaySpace(cause, spec, coords, arrays, {"rays": ray_info})
+    frontier = coverage_frontier(space)
+    meta = collect(config=config, space=name,
                    cause=cause.to_dict() if cause else None, ray_spec=spec.to_dict(),
-                   n_rays=len(rays), n_stopped=n_failed,
-                   rays={r["ray_id"]: solver[r["ray_id"]] for r in rays})
+                   n_rays=len(rays), n_stopped=n_failed, rays=ray_info,
+                   coverage=frontier.drop(columns=["reason"]).to_dict(orient="records"))
     space = RaySpace(cause, spec, coords, arrays, meta)
     _write_parquet(space.frame(), out_path, meta)
-    log.info("%s space: %d rays (%d stopped early) -> %s", space.name, len(rays), n_failed,
-             out_path)
+    log.info("%s space: %d rays (%d stopped early) -> %s", name, len(rays), n_failed, out_path)
     return space
 
 
 def read_ray_space(path) -> RaySpace:
     """Read a space written by :func:`assemble_ray_space`."""
     frame, meta = _read_parquet(path)
-    if "ray_spec" not in meta:
-        raise ValueError(f"{path}: not a ray space of the diagnosis")
+    if "ray_spec" not in meta or "load_max" not in meta["ray_spec"]:
+        raise ValueError(f"{path}: not a scale-free simulated space (rebuild it with the "
+                         "workflow)")
     spec = RaySpec(**meta["ray_spec"])
     cause = Cause.from_dict(meta["cause"]) if meta.get("cause") else None
     coords = np.array(cause.nodes if cause is not None else [math.nan])
@@ -405,22 +519,24 @@ def read_ray_space(path) -> RaySpace:
 
 
 def read_ray_spaces(space_dir) -> dict:
-    """All ray spaces of a directory: ``{name: RaySpace}``; the neo-Hookean one is needed.
+    """All spaces of a scale-free space directory: ``{name: RaySpace}``.
 
-    Raises :class:`SpaceMissingError` with the command that builds them if the
-    directory or the neo-Hookean space is missing.
+    The neo-Hookean one is needed.  Raises :class:`SpaceMissingError` with the
+    command that builds them if the directory or the neo-Hookean space is missing.
     """
     d = Path(space_dir)
-    hint = ("build them with the workflow: `snakemake --cores 2 diagnosis_spaces` "
-            "(or `--configfile config/ci.yaml` for coarse ones)")
+    if d.is_file() and d.suffix == ".parquet":
+        d = d.parent
+    hint = ("build it with the workflow: `snakemake --cores 2 scale_free_space` "
+            "(or `--configfile config/ci.yaml --replace-workflow-config` for a coarse one)")
     if not d.is_dir():
-        raise SpaceMissingError(f"{d}: no such directory of diagnosis spaces; {hint}")
+        raise SpaceMissingError(f"{d}: no such directory of the scale-free space; {hint}")
     spaces = {}
     for path in sorted(d.glob("*.parquet")):
         try:
             s = read_ray_space(path)
         except Exception as err:  # pyarrow raises many types for a bad file
-            raise SpaceFileError(f"{path}: not a diagnosis space ({type(err).__name__}: "
+            raise SpaceFileError(f"{path}: not a scale-free space ({type(err).__name__}: "
                                  f"{' '.join(str(err).split())[:200]})") from None
         spaces[s.name] = s
     if BASELINE not in spaces:
@@ -430,11 +546,11 @@ def read_ray_spaces(space_dir) -> dict:
 
 def build_ray_spaces(spec: RaySpec, causes: dict, out_dir=None, workers: int = 1,
                      config=None) -> dict:
-    """Run every ray in this process (or a pool) and return ``{name: RaySpace}``.
+    """Run every bundle in this process (or a pool) and return ``{name: RaySpace}``.
 
-    For tests, notebooks and benchmarks; the workflow runs one job per ray.
-    With ``out_dir`` the ray and space files are written there
-    (``out_dir/rays/<id>.parquet``, ``out_dir/<name>.parquet``); files of rays
+    For tests, notebooks and benchmarks; the workflow runs one job per bundle.
+    With ``out_dir`` the bundle and space files are written there
+    (``out_dir/rays/<bundle>.parquet``, ``out_dir/<name>.parquet``); bundle files
     already present are reused.
     """
     import tempfile
@@ -445,35 +561,31 @@ def build_ray_spaces(spec: RaySpec, causes: dict, out_dir=None, workers: int = 1
         out_dir = tmp.name
     out = Path(out_dir)
     (out / "rays").mkdir(parents=True, exist_ok=True)
-    models = {BASELINE: None, **causes}
-    todo = {}
-    for cause in models.values():
-        for ray in rays_of(spec, cause):
-            path = out / "rays" / f"{ray['ray_id']}.parquet"
-            if not path.exists():
-                todo[ray["ray_id"]] = path
-    jobs = [(rid, str(path), spec.pressures_mbar, spec.mesh) for rid, path in todo.items()]
+    bundles = ray_bundles(spec, causes)
+    jobs = [(ids, str(out / "rays" / f"{bid}.parquet"), spec.pressures_mbar, spec.mesh,
+             list(spec.fallback))
+            for bid, ids in bundles.items() if not (out / "rays" / f"{bid}.parquet").exists()]
     if workers > 1 and len(jobs) > 1:
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(workers) as pool:
-            list(pool.map(_compute_ray_job, jobs))
+            list(pool.map(_compute_bundle_job, jobs))
     else:
         for job in jobs:
-            _compute_ray_job(job)
+            _compute_bundle_job(job)
+    paths = [out / "rays" / f"{bid}.parquet" for bid in bundles]
     spaces = {}
-    for name, cause in models.items():
-        paths = [out / "rays" / f"{r['ray_id']}.parquet" for r in rays_of(spec, cause)]
+    for name, cause in {BASELINE: None, **causes}.items():
         spaces[name] = assemble_ray_space(paths, out / f"{name}.parquet", spec, cause, config)
     if tmp is not None:
         tmp.cleanup()
     return spaces
 
 
-def _compute_ray_job(job):
-    rid, path, pressures, mesh = job
-    compute_ray(rid, path, pressures, mesh)
-    return rid
+def _compute_bundle_job(job):
+    ids, path, pressures, mesh, fallback = job
+    compute_bundle(ids, path, pressures, mesh, fallback)
+    return path
 
 
 # ------------------------------------------------------------------ interpolation
@@ -514,37 +626,49 @@ class RayInterpolant:
     space : RaySpace
     probe_mm : float
     pressure_mbar : array_like (u,)
-        Measured pressures (mbar), within the ray pressures.
+        Measured pressures (mbar), any protocol.
 
-    Calling it with ``theta (N, d)`` = ``(log10 X1d, log10 r[, c])`` returns the
-    deflections (N, u) in mm; NaN outside the space or where a ray stopped.
+    Calling it with ``theta (N, d)`` = ``(log10 X1d, log10 r[, u])`` (``u`` the
+    cause's axis coordinate, :meth:`Cause.to_axis`) returns the deflections
+    (N, u) in mm; NaN outside the space or beyond the reach of a ray.  Any
+    pressures >= 0 are allowed: the lowest X1d searched is raised to
+    ``p_max / load_max`` (:attr:`lower`).
     """
 
     def __init__(self, space: RaySpace, probe_mm: float, pressure_mbar):
         self.space = space
         self.probe_mm = float(probe_mm)
         p = np.asarray(pressure_mbar, dtype=float).reshape(-1)
-        pr = np.asarray(space.spec.pressures_mbar)
-        if np.any(p < 0) or np.any(p > pr[-1] + 1e-9):
-            raise ValueError(f"pressures must lie in 0..{pr[-1]:g} mbar (the rays' range)")
+        spec = space.spec
+        if p.size == 0 or np.any(p < 0) or not np.all(np.isfinite(p)):
+            raise ValueError("pressures must be finite and >= 0 mbar")
         self.pressure_mbar = p
-        self.x1d_ref = space.spec.x1d_ref
+        self.x1d_min = spec.x1d_lower(p.max())
+        if self.x1d_min >= spec.x1d_range[1]:
+            raise ValueError(
+                f"a pressure of {p.max():g} mbar is beyond the reach of the scale-free space: "
+                f"p/X1d <= {spec.load_max:g} mbar/MPa and X1d <= {spec.x1d_range[1]:g} MPa "
+                f"allow at most {spec.reach_mbar():g} mbar (scale_free_space.load.max, "
+                "scale_free_space.x1d_mpa.max)")
+        self.x1d_ref = spec.x1d_ref
         rays = space.rays(probe_mm)  # (n_r, n_c, n_p)
         with np.errstate(divide="ignore", invalid="ignore"):
             g = np.log(rays[..., 1:])  # log M at p > 0; M(0) = 0
         g[~np.isfinite(g)] = np.nan  # a zero or negative deflection is unusable
         self._g = g
-        self._axis_r = LagrangeAxis(np.log10(space.spec.ratio_nodes))
-        self._axis_c = LagrangeAxis(space.coordinates) if space.cause is not None else None
-        self._axis_p = LagrangeAxis(pr)
+        self._axis_r = LagrangeAxis(np.log10(spec.ratio_nodes))
+        self._axis_c = (LagrangeAxis(space.cause.axis_nodes) if space.cause is not None
+                        else None)
+        self._axis_p = LagrangeAxis(np.asarray(spec.pressures_mbar))
         self.d = 2 if space.cause is None else 3
 
     @property
     def lower(self) -> np.ndarray:
+        """Lower bounds of theta: log10 X1d (raised by the load reach), log10 r[, u]."""
         s = self.space.spec
-        lo = [math.log10(s.x1d_range[0]), math.log10(s.ratio_nodes[0])]
+        lo = [math.log10(self.x1d_min), math.log10(s.ratio_nodes[0])]
         if self.d == 3:
-            lo.append(self.space.cause.lower)
+            lo.append(float(self.space.cause.axis_nodes[0]))
         return np.array(lo)
 
     @property
@@ -552,7 +676,7 @@ class RayInterpolant:
         s = self.space.spec
         hi = [math.log10(s.x1d_range[1]), math.log10(s.ratio_nodes[-1])]
         if self.d == 3:
-            hi.append(self.space.cause.upper)
+            hi.append(float(self.space.cause.axis_nodes[-1]))
         return np.array(hi)
 
     def _combine(self, theta, start_r, start_c=None):
@@ -613,19 +737,80 @@ class RayInterpolant:
         np.exp(g, out=out[:, 1:])
         return out
 
-    def __call__(self, theta) -> np.ndarray:
+    def __call__(self, theta, out=None) -> np.ndarray:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         if theta.shape[1] != self.d:
             raise ValueError(f"candidates must have {self.d} columns, got {theta.shape}")
         n, u = theta.shape[0], self.pressure_mbar.size
         rays = self.combined_rays(theta)  # (N, n_p)
         x1d = 10.0 ** theta[:, 0]
+        # the scaling law: the candidate at p reads its ray at load p / X1d, i.e. at the
+        # pressure p X1d_ref / X1d of the FE run; beyond the ray's reach: NaN
         q = self.pressure_mbar[None, :] * (self.x1d_ref / x1d)[:, None]  # (N, u)
         start, w = self._axis_p.weights(q.reshape(-1))
         idx = start[:, None] + np.arange(self._axis_p.m)  # (N u, m)
         rows = np.repeat(np.arange(n), u)[:, None]
         nodes = rays[rows, idx]
         vals = np.where(w == 0.0, 0.0, w * nodes).sum(axis=1)
-        # below X1d_ref the ray would be read beyond its range: outside the space
-        vals[np.repeat(x1d < self.x1d_ref * (1 - 1e-12), u)] = np.nan
-        return vals.reshape(n, u)
+        # next to where a ray stopped, the centred stencil reaches past its last load:
+        # shift it back while it still holds the candidate's cell
+        hole = np.flatnonzero(np.isnan(vals) & ~np.isnan(w[:, 0]))
+        if hole.size:
+            qh = q.reshape(-1)[hole]
+            cell = np.searchsorted(self._axis_p.nodes, qh, side="right") - 1
+            for shift in (1, 2):
+                s = start[hole] - shift
+                ok = (s >= 0) & (s + self._axis_p.m - 2 >= cell)
+                if not ok.any():
+                    break
+                ws = _weights_at(self._axis_p, qh[ok], s[ok])
+                ids = s[ok, None] + np.arange(self._axis_p.m)
+                alt = np.where(ws == 0.0, 0.0, ws * rays[rows[hole[ok]], ids]).sum(axis=1)
+                fill = hole[ok]
+                vals[fill] = np.where(np.isnan(vals[fill]), alt, vals[fill])
+        vals = vals.reshape(n, u)
+        if out is None:
+            return vals
+        out[...] = vals
+        return out
+
+
+class NeoHookeanSlice:
+    """The neo-Hookean scale-free space of one probe, for the identification objectives.
+
+    What :class:`skinsuction.identify.SingleObjective` needs of a space: a
+    probe, an interpolant at the measured pressures and the map of its
+    candidates to moduli.  The candidates are ``theta = (log10 X1d, log10 X1h/X1d)``,
+    so the window focusing samples decades evenly and the window is the box of
+    the space (the X1d window of the configuration, its lower end raised to
+    ``p_max / load_max``).
+
+    Parameters
+    ----------
+    space : RaySpace
+        The neo-Hookean space (or a cause's space, whose neutral rays are used).
+    probe_mm : float
+    """
+
+    coordinates = ("log10 X1d", "log10 X1h/X1d")
+
+    def __init__(self, space: RaySpace, probe_mm: float):
+        self.space = space.null_slice()
+        self.space.rays(probe_mm)  # KeyError naming the probes if absent
+        self.probe_mm = float(probe_mm)
+
+    def interpolant_at(self, pressure_mbar) -> RayInterpolant:
+        return RayInterpolant(self.space, self.probe_mm, pressure_mbar)
+
+    @staticmethod
+    def to_moduli(theta) -> np.ndarray:
+        """(N, 2) X1d, X1h in MPa of candidates theta."""
+        t = np.atleast_2d(np.asarray(theta, dtype=float))
+        x1d = 10.0 ** t[:, 0]
+        return np.stack([x1d, x1d * 10.0 ** t[:, 1]], axis=1)
+
+    @staticmethod
+    def from_moduli(x) -> np.ndarray:
+        """Candidates theta of (N, 2) moduli X1d, X1h in MPa."""
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        return np.stack([np.log10(x[:, 0]), np.log10(x[:, 1] / x[:, 0])], axis=1)

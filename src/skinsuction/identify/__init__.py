@@ -17,6 +17,7 @@ Examples
 ([0.0055, 0.00041], True)
 """
 
+from ._bounds import BOUND_FRACTION, bound_flags
 from ._baselines import BaselineResult, differential_evolution_fit, least_squares_from_random_starts
 from ._interpolate import LagrangeAxis, SpaceInterpolant, evaluate, interpolate_pressure
 from ._objectives import (
@@ -49,6 +50,8 @@ from ._window_focusing import (
 
 __all__ = [
     "GriddedSpace",
+    "bound_flags",
+    "BOUND_FRACTION",
     "LagrangeAxis",
     "SpaceInterpolant",
     "interpolate_pressure",

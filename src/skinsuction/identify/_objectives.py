@@ -88,6 +88,11 @@ def _curve_arrays(curve):
     return p, m, probe
 
 
+def _as_rows(x) -> np.ndarray:
+    """Candidates as (N, d) rows: the map to moduli of a grid space (the identity)."""
+    return np.atleast_2d(np.asarray(x, dtype=float))
+
+
 def _bounds_of(*objectives):
     lower = np.max([o.lower for o in objectives], axis=0)
     upper = np.min([o.upper for o in objectives], axis=0)
@@ -101,8 +106,10 @@ class SingleObjective:
 
     Parameters
     ----------
-    space : GriddedSpace
-        Simulated space of the probe used for the measurement.
+    space : GriddedSpace or NeoHookeanSlice
+        Simulated space of the probe used for the measurement: the paper grid
+        (candidates (X1d, X1h) in MPa) or the scale-free space (candidates
+        (log10 X1d, log10 X1h/X1d); ``to_moduli`` maps them to MPa).
     curve : MeasuredCurve or (pressure_mbar, deflection_mm)
         The measured curve M(p).  Its pressures must lie inside the simulated
         pressure range; they need not be grid pressures.
@@ -132,9 +139,15 @@ class SingleObjective:
         self.space = space
         self.pressure_mbar = p
         self.measured_mm = m
-        self.interpolant = SpaceInterpolant(interpolate_pressure(space, p), nan_policy)
+        if hasattr(space, "interpolant_at"):  # the scale-free space (candidates in logs)
+            self.interpolant = space.interpolant_at(p)
+            self.lower, self.upper = self.interpolant.lower, self.interpolant.upper
+            self.to_moduli, self.from_moduli = space.to_moduli, space.from_moduli
+        else:
+            self.interpolant = SpaceInterpolant(interpolate_pressure(space, p), nan_policy)
+            self.lower, self.upper = space.lower, space.upper
+            self.to_moduli = self.from_moduli = _as_rows
         self.n_points = p.size
-        self.lower, self.upper = space.lower, space.upper
         self._buffer = np.empty((0, p.size))
 
     def curves(self, candidates) -> np.ndarray:
@@ -195,6 +208,7 @@ class WeightedObjective:
         self.objective_6mm = objective_6mm
         self.alpha = alpha
         self.lower, self.upper = _bounds_of(objective_2mm, objective_6mm)
+        self.to_moduli, self.from_moduli = objective_6mm.to_moduli, objective_6mm.from_moduli
         self.n_points = alpha * objective_2mm.n_points + (1 - alpha) * objective_6mm.n_points
 
     def residuals(self, candidates) -> np.ndarray:
@@ -276,6 +290,8 @@ class RatioObjective:
         self.objective_2mm = SingleObjective(space_2mm, (p, m2), nan_policy)
         self.objective_6mm = SingleObjective(space_6mm, (p, m6), nan_policy)
         self.lower, self.upper = _bounds_of(self.objective_2mm, self.objective_6mm)
+        self.to_moduli = self.objective_6mm.to_moduli
+        self.from_moduli = self.objective_6mm.from_moduli
         self.n_points = p.size
 
     def theta(self, candidates) -> np.ndarray:

@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._bounds import bound_flags
 from ._objectives import ratio_objective, single_objective, weighted_objective
 from ._space import GriddedSpace
 from ._window_focusing import identify_repeated
@@ -45,9 +46,6 @@ __all__ = ["InputError", "OBJECTIVE_KINDS", "identify_measured", "write_identifi
 
 #: Objectives of ``skinsuction identify --objective``.
 OBJECTIVE_KINDS = ("single", "weighted", "ratio")
-
-#: Fraction of the window width within which an estimate counts as on the boundary.
-EDGE_FRACTION = 0.01
 
 #: Interquartile range / median of the repeats above which a warning is given.
 SPREAD_WARNING = 0.05
@@ -66,14 +64,54 @@ def file_sha256(path) -> str:
     return h.hexdigest()
 
 
+#: Default simulated space of ``skinsuction identify``: the scale-free space.
+DEFAULT_SPACE = "results/simulated_space/scale_free"
+
+
+def _is_scale_free(path: Path) -> bool:
+    if path.is_dir():
+        return True
+    try:
+        import json
+
+        import pyarrow.parquet as pq
+
+        meta = pq.read_schema(path).metadata or {}
+        return "ray_spec" in json.loads(meta.get(b"skinsuction", b"{}"))
+    except Exception:  # a bad file is reported by the reader below
+        return False
+
+
+def _read_scale_free(path: Path, bottom):
+    """The neo-Hookean scale-free space: ({probe: NeoHookeanSlice}, metadata, reach)."""
+    from skinsuction.diagnose._causes import BASELINE
+    from skinsuction.diagnose._rays import NeoHookeanSlice, read_ray_space, read_ray_spaces
+
+    try:
+        space = (read_ray_space(path) if path.is_file()
+                 else read_ray_spaces(path)[BASELINE])
+    except FileNotFoundError as err:
+        raise InputError(str(err)) from None
+    except Exception as err:  # pyarrow raises many types for a bad file
+        raise InputError(f"{path}: not a scale-free simulated space "
+                         f"({type(err).__name__}: {' '.join(str(err).split())[:200]})") from None
+    if space.spec.bottom != bottom:
+        raise InputError(f"{path}: the scale-free space has bottom {space.spec.bottom!r}, "
+                         f"not {bottom!r}")
+    slices = {p: NeoHookeanSlice(space, p) for p in space.probes_mm}
+    return slices, space.metadata, (0.0, space.spec.reach_mbar())
+
+
 def _read_space(space_path, bottom):
-    """The simulated space: ({probe: GriddedSpace}, metadata)."""
+    """The simulated space: ({probe: GriddedSpace or NeoHookeanSlice}, metadata, range)."""
     from skinsuction.space import read_space
 
     path = Path(space_path)
-    if not path.is_file():
+    if not path.exists():
         raise InputError(f"{path}: simulated space not found (build it with the workflow, "
-                         "e.g. `snakemake --cores 2`)")
+                         "e.g. `snakemake --cores 2 scale_free_space`)")
+    if _is_scale_free(path):
+        return _read_scale_free(path, bottom)
     try:
         space = read_space(path)
         slices = space.slices()
@@ -90,7 +128,29 @@ def _read_space(space_path, bottom):
             spaces[probe] = GriddedSpace.from_space(space, probe, bottom=bottom)
         except ValueError as err:
             raise InputError(f"{path}: the {probe:g} mm space is not a usable grid ({err})") from None
-    return spaces, space.metadata
+    p_range = (max(float(s.pressure_mbar[0]) for s in spaces.values()),
+               min(float(s.pressure_mbar[-1]) for s in spaces.values()))
+    return spaces, space.metadata, p_range
+
+
+def _pressure_range(spaces):
+    lo, hi = 0.0, math.inf
+    for s in spaces:
+        if hasattr(s, "interpolant_at"):
+            hi = min(hi, s.space.spec.reach_mbar())
+        else:
+            lo, hi = max(lo, float(s.pressure_mbar[0])), min(hi, float(s.pressure_mbar[-1]))
+    return lo, hi
+
+
+def _range_note(spaces):
+    """What sets the pressure range, for the loader's error."""
+    for s in spaces:
+        if hasattr(s, "interpolant_at"):
+            sp = s.space.spec
+            return (f"the reach of the scale-free space: p/X1d <= {sp.load_max:g} mbar/MPa "
+                    f"up to X1d = {sp.x1d_range[1]:g} MPa")
+    return "the pressures of the simulated grid"
 
 
 def _pick_curve(data, probe, curve_id, path):
@@ -112,7 +172,7 @@ def _pick_curve(data, probe, curve_id, path):
 
 def identify_measured(
     measured_path,
-    space_path=None,
+    space_path=DEFAULT_SPACE,
     *,
     objective: str = "single",
     probe_mm: float = 6.0,
@@ -131,7 +191,9 @@ def identify_measured(
     measured_path : path-like
         Measured CSV (format: :mod:`skinsuction.measured`).
     space_path : path-like
-        Simulated-space database (``results/simulated_space/<name>.parquet``).
+        The scale-free space (its directory, default
+        ``results/simulated_space/scale_free``, or its ``neo_hookean.parquet``),
+        or a grid database such as the paper's (``results/simulated_space/paper.parquet``).
     objective : {"single", "weighted", "ratio"}
         ``single``: the curve of ``probe_mm`` alone (eq. 4); ``weighted``: the 2
         and 6 mm curves, ``alpha`` on 2 mm (eq. 10); ``ratio``: 6 mm / 2 mm
@@ -151,7 +213,8 @@ def identify_measured(
     window_focusing : dict, optional
         N, Nb, C, max_iter (``n_samples``, ``n_best``, ``tolerance``, ``max_iter``).
     spaces : dict, optional
-        ``{probe_mm: GriddedSpace}`` instead of ``space_path`` (tests, notebooks).
+        ``{probe_mm: GriddedSpace or NeoHookeanSlice}`` instead of ``space_path``
+        (tests, notebooks).
 
     Returns
     -------
@@ -170,13 +233,16 @@ def identify_measured(
     if int(repeats) < 1:
         raise InputError(f"repeats must be >= 1, got {repeats}")
     if spaces is None:
-        spaces, space_meta = _read_space(space_path, bottom)
-        space_info = {"path": str(space_path), "sha256": file_sha256(space_path),
+        spaces, space_meta, p_range = _read_space(space_path, bottom)
+        sp = Path(space_path)
+        sha_of = sp if sp.is_file() else sp / "neo_hookean.parquet"
+        space_info = {"path": str(space_path), "sha256": file_sha256(sha_of),
                       "name": space_meta.get("space"),
                       "git_commit": (space_meta.get("git") or {}).get("commit"),
-                      "mesh": space_meta.get("mesh")}
+                      "mesh": space_meta.get("mesh") or (space_meta.get("ray_spec") or {}).get("mesh")}
     else:
         space_info = {"path": None, "sha256": None, "name": "given in memory"}
+        p_range = None
     probes_needed = [float(probe_mm)] if objective == "single" else [2.0, 6.0]
     for p in probes_needed:
         if not any(math.isclose(p, q, abs_tol=1e-6) for q in spaces):
@@ -186,10 +252,11 @@ def identify_measured(
     all_probes = list(spaces)
     spaces = {p: spaces[next(q for q in spaces if math.isclose(p, q, abs_tol=1e-6))]
               for p in probes_needed}
-    p_lo = max(float(s.pressure_mbar[0]) for s in spaces.values())
-    p_hi = min(float(s.pressure_mbar[-1]) for s in spaces.values())
+    if p_range is None:
+        p_range = _pressure_range(spaces.values())
     data = load_measured(measured_path, available_probes=all_probes,
-                         pressure_range_mbar=(p_lo, p_hi))
+                         pressure_range_mbar=p_range,
+                         range_note=_range_note(spaces.values()))
     curves = {p: _pick_curve(data, p, curve, measured_path) for p in probes_needed}
 
     if objective == "single":
@@ -206,26 +273,31 @@ def identify_measured(
           **(window_focusing or {})}
     rep = identify_repeated(obj, repeats=int(repeats), seed=int(seed), **wf)
 
-    est = np.median(rep.estimates, axis=0)
-    j_est = float(obj(est.reshape(1, 2))[0])
+    # the runs' candidates (theta: MPa on a grid space, logs on the scale-free one)
+    est_theta = np.median(rep.estimates, axis=0)
+    j_est = float(obj(est_theta.reshape(1, 2))[0])
     e_est = float(obj.error(j_est))
     best = int(np.argmin(rep.E))
-    q25, q75 = np.percentile(rep.estimates, [25, 75], axis=0)
+    runs_mpa = obj.to_moduli(rep.estimates)
+    est = obj.to_moduli(est_theta)[0]
+    q25, q75 = np.percentile(runs_mpa, [25, 75], axis=0)
     warnings = []
-    width = obj.upper - obj.lower
-    for i, name in enumerate(("X1d", "X1h")):
-        if est[i] <= obj.lower[i] + EDGE_FRACTION * width[i] or \
-                est[i] >= obj.upper[i] - EDGE_FRACTION * width[i]:
-            warnings.append(f"{name} = {est[i]:.4g} MPa is at the edge of the simulated space "
-                            f"({obj.lower[i]:.4g}..{obj.upper[i]:.4g} MPa); the best value may "
-                            "lie outside it")
+    scale_free = any(hasattr(s, "interpolant_at") for s in spaces.values())
+    flags = bound_flags(obj, est_theta, ["X1d", "X1h"],
+                        ["log", "log"] if scale_free else ["relative", "relative"],
+                        _bound_keys(spaces, obj, space_info))
+    for f, value in zip(flags, est):
+        if f["at_bound"]:
+            warnings.append(_bound_warning(f, value, obj))
     if not math.isfinite(e_est):
         warnings.append("the median estimate falls where the space is not usable "
                         "(non-converged FE points); see best_run")
     if not rep.converged.all():
         warnings.append(f"{int((~rep.converged).sum())} of {len(rep.converged)} runs hit "
                         f"max_iter={wf['max_iter']} before the stop criterion")
-    rel_spread = rep.std / np.abs(rep.mean)
+    mean = runs_mpa.mean(axis=0)
+    std = runs_mpa.std(axis=0, ddof=1) if len(runs_mpa) > 1 else np.zeros(2)
+    rel_spread = std / np.abs(mean)
     rel_iqr = (q75 - q25) / np.abs(est)
     if rel_iqr.max() > SPREAD_WARNING:
         warnings.append(f"the repeats disagree by more than {100 * SPREAD_WARNING:g} % "
@@ -234,7 +306,7 @@ def identify_measured(
 
     fit = {}
     for p, c in curves.items():
-        fitted = single_objective(spaces[p], c).curves(est.reshape(1, 2))[0]
+        fitted = single_objective(spaces[p], c).curves(est_theta.reshape(1, 2))[0]
         fit[f"{p:g}"] = {
             "curve": c.curve,
             "pressure_mbar": c.pressure_mbar.tolist(),
@@ -255,9 +327,10 @@ def identify_measured(
         },
         "space": {**space_info,
                   "bottom": bottom,
-                  "bounds_mpa": {"x1d": [float(obj.lower[0]), float(obj.upper[0])],
-                                 "x1h": [float(obj.lower[1]), float(obj.upper[1])]},
-                  "grid": {f"{p:g}": list(s.shape) for p, s in spaces.items()}},
+                  "kind": "scale_free" if scale_free else "grid",
+                  **_bounds_json(obj, scale_free),
+                  "grid": {f"{p:g}": list(s.shape) for p, s in spaces.items()
+                           if hasattr(s, "shape")}},
         "settings": {
             "objective": objective,
             "probe_mm": float(probe_mm) if objective == "single" else None,
@@ -270,16 +343,17 @@ def identify_measured(
         },
         "estimate": {"x1d_mpa": float(est[0]), "x1h_mpa": float(est[1]),
                      "statistic": "median over the repeats"},
-        "best_run": {"x1d_mpa": float(rep.estimates[best, 0]),
-                     "x1h_mpa": float(rep.estimates[best, 1]), "E": float(rep.E[best])},
+        "at_bound": {f["parameter"]: f for f in flags},
+        "best_run": {"x1d_mpa": float(runs_mpa[best, 0]),
+                     "x1h_mpa": float(runs_mpa[best, 1]), "E": float(rep.E[best])},
         "spread": {
-            "x1d_std_mpa": float(rep.std[0]), "x1h_std_mpa": float(rep.std[1]),
+            "x1d_std_mpa": float(std[0]), "x1h_std_mpa": float(std[1]),
             "x1d_relative_std": float(rel_spread[0]), "x1h_relative_std": float(rel_spread[1]),
             "x1d_relative_iqr": float(rel_iqr[0]), "x1h_relative_iqr": float(rel_iqr[1]),
             "x1d_iqr_mpa": [float(q25[0]), float(q75[0])],
             "x1h_iqr_mpa": [float(q25[1]), float(q75[1])],
-            "x1d_range_mpa": [float(rep.estimates[:, 0].min()), float(rep.estimates[:, 0].max())],
-            "x1h_range_mpa": [float(rep.estimates[:, 1].min()), float(rep.estimates[:, 1].max())],
+            "x1d_range_mpa": [float(runs_mpa[:, 0].min()), float(runs_mpa[:, 0].max())],
+            "x1h_range_mpa": [float(runs_mpa[:, 1].min()), float(runs_mpa[:, 1].max())],
         },
         "E": {"at_estimate": e_est, "median_over_runs": float(np.median(rep.E)),
               "unit": obj.error_unit,
@@ -290,9 +364,41 @@ def identify_measured(
         "fit": fit,
         "runs": [{"x1d_mpa": float(x[0]), "x1h_mpa": float(x[1]), "E": float(e),
                   "iterations": int(n)}
-                 for x, e, n in zip(rep.estimates, rep.E, rep.iterations)],
+                 for x, e, n in zip(runs_mpa, rep.E, rep.iterations)],
         "warnings": warnings,
     }
+
+
+def _bounds_json(obj, scale_free: bool) -> dict:
+    lo, hi = obj.to_moduli(obj.lower)[0], obj.to_moduli(obj.upper)[0]
+    if scale_free:  # a box in (X1d, X1h/X1d)
+        return {"bounds_mpa": {"x1d": [float(lo[0]), float(hi[0])]},
+                "bounds_x1h_over_x1d": [float(10 ** obj.lower[1]), float(10 ** obj.upper[1])]}
+    return {"bounds_mpa": {"x1d": [float(lo[0]), float(hi[0])],
+                           "x1h": [float(lo[1]), float(hi[1])]}}
+
+
+def _bound_keys(spaces, obj, space_info):
+    """Configuration keys that widen each end of the X1d and X1h axes."""
+    first = next(iter(spaces.values()))
+    if hasattr(first, "interpolant_at"):
+        spec = first.space.spec
+        raised = obj.lower[0] > math.log10(spec.x1d_range[0]) + 1e-12
+        x1d_lo = ("scale_free_space.load.max (the curve's largest pressure over load.max "
+                  "sets the lowest X1d)" if raised else "scale_free_space.x1d_mpa.min")
+        return [(x1d_lo, "scale_free_space.x1d_mpa.max"),
+                ("scale_free_space.ratio", "scale_free_space.ratio")]
+    name = space_info.get("name") or "<name>"
+    return [(f"spaces.{name}.x1d", f"spaces.{name}.x1d"),
+            (f"spaces.{name}.x1h", f"spaces.{name}.x1h")]
+
+
+def _bound_warning(flag, value, obj) -> str:
+    where = ("the end of the simulated window" if flag["edge"] == "window"
+             else "the coverage frontier (the FE rays or grid points stop there)")
+    return (f"AT BOUND: {flag['parameter']} = {value:.4g} MPa sits at the {flag['side']} "
+            f"edge of the simulated space ({where}); the best value may lie beyond it. "
+            f"Widen it with {flag['config_key']}")
 
 
 def _finite_list(a):

@@ -1,4 +1,4 @@
-"""Rule assemble_diagnosis_space: the rays of one model -> its ray space."""
+"""Rule assemble_scale_free_space: the ray bundles of one model -> its scale-free space."""
 
 from skinsuction.provenance import log_to_file
 
@@ -10,5 +10,5 @@ with log_to_file(snakemake.log[0]):
     cause = None
     if snakemake.params.cause is not None:
         cause = registry_from_config({name: snakemake.params.cause})[name]
-    assemble_ray_space(snakemake.input.rays, snakemake.output.space, spec, cause,
+    assemble_ray_space(snakemake.input.bundles, snakemake.output.space, spec, cause,
                        config=snakemake.config)

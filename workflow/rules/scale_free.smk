@@ -1,0 +1,141 @@
+"""The scale-free simulated space (what `skinsuction identify` and `diagnose` read).
+
+Included by the Snakefile when the configuration has a `scale_free_space` section.
+
+config.scale_free_space -> FE ray bundles, one job per (model, probe, X1h/X1d)
+  (results/simulated_space/scale_free/rays/<bundle>.parquet)
+  -> one space per model: neo_hookean + one per cause
+  (results/simulated_space/scale_free/<model>.parquet)
+  -> coverage frontier (results/tables/scale_free_coverage.csv, figure)
+
+A ray is one FE curve at X1d = x1d_ref loaded to p/X1d = load.max; the scaling
+law M(s X1d, s X1h, s X2d, s p) = M(X1d, X1h, X2d, p) makes it cover every X1d
+(see skinsuction.diagnose._rays). The rays of a cause at its neutral value are
+the neo-Hookean rays: the same jobs.
+"""
+
+from skinsuction.diagnose._causes import BASELINE, registry_from_config  # noqa: E402
+from skinsuction.diagnose._rays import (  # noqa: E402
+    BUNDLE_ID_PATTERN,
+    RaySpec,
+    bundle_id,
+    ray_bundles,
+)
+
+SF = config["scale_free_space"]
+try:
+    SF_CAUSES = registry_from_config(SF["causes"])
+    SF_SPEC = RaySpec.from_config(SF, config.get("mesh"), config.get("mesh_fallback"))
+except (KeyError, ValueError) as err:
+    raise _config_error("scale_free_space", err)
+SF_MODELS = {BASELINE: None, **SF_CAUSES}
+SF_BUNDLES = ray_bundles(SF_SPEC, SF_CAUSES)
+SF_DIR = "results/simulated_space/scale_free"
+SF_SPACES = expand(f"{SF_DIR}/{{model}}.parquet", model=SF_MODELS)
+
+
+def sf_bundles_of(model):
+    """Bundle files that hold the rays of one model (its own and the neutral rays)."""
+    own = [b for b in SF_BUNDLES if b.startswith(f"{model}__")]
+    neutral = [b for b in SF_BUNDLES if b.startswith(f"{BASELINE}__")]
+    return [f"{SF_DIR}/rays/{b}.parquet" for b in dict.fromkeys(own + neutral)]
+
+
+wildcard_constraints:
+    bundle=BUNDLE_ID_PATTERN,
+    model="|".join(map(re.escape, SF_MODELS)),
+
+
+SCALE_FREE_OUTPUTS = [
+    *SF_SPACES,
+    "results/tables/scale_free_coverage.csv",
+    "results/figures/scale_free_coverage.png",
+    "results/figures/scale_free_coverage.pdf",
+]
+
+
+localrules:
+    scale_free_space,
+
+
+rule scale_free_space:
+    """Target: every model of the scale-free space and its coverage frontier."""
+    input:
+        SCALE_FREE_OUTPUTS,
+
+
+rule simulate_ray_bundle:
+    output:
+        bundle=f"{SF_DIR}/rays/{{bundle}}.parquet",
+    log:
+        "logs/scale_free/rays/{bundle}.log",
+    benchmark:
+        "results/benchmarks/scale_free/rays/{bundle}.tsv"
+    params:
+        # a change of any of these reruns the FE jobs (Snakemake's params trigger)
+        rays=lambda w: SF_BUNDLES[w.bundle],
+        pressures=list(SF_SPEC.pressures_mbar),
+        mesh=SF_SPEC.mesh,
+        fallback=[dict(f) for f in SF_SPEC.fallback],
+        # the model, and the fallback chain and curve format in space.py
+        code=code_hash("model", "space.py"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=60,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/simulate_ray_bundle.py"
+
+
+rule assemble_scale_free_space:
+    input:
+        bundles=lambda w: sf_bundles_of(w.model),
+    output:
+        space=f"{SF_DIR}/{{model}}.parquet",
+    log:
+        "logs/scale_free/{model}.log",
+    params:
+        spec=SF_SPEC.to_dict(),
+        cause=lambda w: SF["causes"].get(w.model),
+        code=code_hash("diagnose", "space.py", "provenance.py"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/assemble_scale_free_space.py"
+
+
+rule scale_free_coverage:
+    input:
+        spaces=SF_SPACES,
+    output:
+        table=report(
+            "results/tables/scale_free_coverage.csv",
+            caption="../report/scale_free_coverage.rst",
+            category="Simulated spaces",
+            labels={"space": "scale_free", "table": "coverage frontier"},
+        ),
+        png=report(
+            "results/figures/scale_free_coverage.png",
+            caption="../report/scale_free_coverage.rst",
+            category="Simulated spaces",
+            labels={"space": "scale_free", "figure": "coverage frontier"},
+        ),
+        pdf="results/figures/scale_free_coverage.pdf",
+    log:
+        "logs/scale_free/coverage.log",
+    params:
+        code=code_hash("diagnose", "figures", "space.py"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/scale_free_coverage.py"
