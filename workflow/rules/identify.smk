@@ -396,3 +396,43 @@ rule optimiser_comparison:
         "../envs/skinsuction.yaml"
     script:
         "../scripts/optimiser_comparison.py"
+
+
+if "scale_free_space" in config:
+
+    IDENTIFICATION_OUTPUTS += [
+        "results/tables/scale_free_vs_paper.csv",
+        "results/tables/scale_free_vs_paper.md",
+    ]
+
+    rule scale_free_vs_paper:
+        """The honest test curve identified on the paper grid and on the scale-free space."""
+        input:
+            paper=ID_SPACE,
+            scale_free=f"{SF_DIR}/{BASELINE}.parquet",
+            curves=ID_CURVES,
+        output:
+            table=report(
+                "results/tables/scale_free_vs_paper.csv",
+                caption="../report/scale_free_vs_paper.rst",
+                category="Identification",
+                labels={"table": "paper grid vs scale-free space"},
+            ),
+            md="results/tables/scale_free_vs_paper.md",
+            runs="results/identification/scale_free_vs_paper_runs.csv",
+        log:
+            "logs/identification/scale_free_vs_paper.log",
+        benchmark:
+            "results/benchmarks/identification/scale_free_vs_paper.tsv"
+        params:
+            settings={k: ID[k] for k in ("target", "bottom", "repeats", "seed", "alpha",
+                                         "success_tolerance", "window_focusing")},
+            code=code_hash("identify", "diagnose", "figures", "space.py"),
+        threads: 1
+        resources:
+            mem_mb=2000,
+            runtime=30,
+        conda:
+            "../envs/skinsuction.yaml"
+        script:
+            "../scripts/scale_free_vs_paper.py"

@@ -42,6 +42,9 @@ from pathlib import Path
 
 import numpy as np
 
+from skinsuction.identify import IdentificationError
+from skinsuction.identify.measured_fit import InputError
+
 from ._causes import BASELINE, NONE
 from ._fit import PAPER_WF, FitData, fit_bounds, fit_model
 from ._stats import (
@@ -53,7 +56,7 @@ from ._stats import (
     noise_from_replicates,
 )
 
-__all__ = ["Settings", "diagnose", "diagnose_file", "prepare_data", "DEFAULT_SPACE_DIR"]
+__all__ = ["BeyondSpaceError", "BEYOND_SPACE", "Settings", "diagnose", "diagnose_file", "prepare_data", "DEFAULT_SPACE_DIR"]
 
 #: Cause and verdict where the best fit sits at an edge of the simulated space.
 BEYOND_SPACE = "beyond_space"
@@ -171,6 +174,20 @@ def prepare_data(data, probes, settings: Settings):
 
 
 # --------------------------------------------------------------------- diagnose
+class BeyondSpaceError(InputError):
+    """No candidate of the simulated space has a curve over the measured pressures."""
+
+
+def _beyond_message(space, fd) -> str:
+    spec = space.spec
+    p_max = max(float(d.pressure_mbar.max()) for d in fd.values())
+    return (f"beyond_space: no neo-Hookean curve of the scale-free space covers the "
+            f"measurement up to {p_max:g} mbar (X1d >= {spec.x1d_lower(p_max):.3g} MPa is "
+            f"searched, and the FE rays stop before the load p/X1d the fit needs: see "
+            f"results/tables/scale_free_coverage.csv); widen scale_free_space.load.max, "
+            f"scale_free_space.mesh_fallback or scale_free_space.x1d_mpa")
+
+
 def _residual_dict(fit, data):
     return {p: (data[p].pressure_mbar, fit.residual_um[p]) for p in data}
 
@@ -253,8 +270,11 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     n_points = sum(d.n for d in fd.values())
 
     # 1. baseline
-    base = fit_model(base_space, fd, seed=next(seeds), repeats=settings.repeats,
-                     window_focusing_options=settings.window_focusing)
+    try:
+        base = fit_model(base_space, fd, seed=next(seeds), repeats=settings.repeats,
+                         window_focusing_options=settings.window_focusing)
+    except IdentificationError:
+        raise BeyondSpaceError(_beyond_message(base_space, fd)) from None
     base_test = misfit_test(_residual_dict(base, fd), sigma, noise.dof, settings.degree,
                             settings.alpha)
     base_bic = bic(base.chi2, base.n_params, n_points)

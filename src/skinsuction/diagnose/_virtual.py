@@ -75,13 +75,15 @@ class VirtualExperiment:
 
 def virtual_experiment(x1d, x1h, cause: Cause | None = None, value=None, *, noise_um=2.0,
                        seed=0, probes_mm=(2.0, 6.0), pressures_mbar=None, mesh=None,
-                       replicates: int = 1, bottom="fixed") -> VirtualExperiment:
+                       replicates: int = 1, bottom="fixed", fallback=None) -> VirtualExperiment:
     """FE curves at (X1d, X1h) with the hidden effect ``cause = value``, plus noise.
 
     ``value`` is in the unit of the cause's parameter (X2d in MPa, t_d in mm,
-    lambda0); ``cause=None`` is the neo-Hookean model.
+    lambda0); ``cause=None`` is the neo-Hookean model.  ``fallback``: fallback
+    meshes where the first solve stops (:func:`skinsuction.space.solve_with_fallbacks`),
+    as for the rays of the space.
     """
-    from skinsuction.model import simulate
+    from skinsuction.space import solve_with_fallbacks
 
     p = (np.arange(0.0, 101.0, 2.0) if pressures_mbar is None
          else np.asarray(pressures_mbar, dtype=float))
@@ -93,8 +95,9 @@ def virtual_experiment(x1d, x1h, cause: Cause | None = None, value=None, *, nois
                            tuple(float(q) for q in probes_mm), dict(mesh or {}),
                            replicates=int(replicates), unit=None if cause is None else cause.unit)
     for probe in ve.probes_mm:
-        c = simulate(x1d, x1h, probe_mm=probe, bottom=bottom, pressures_mbar=p,
-                     mesh=dict(mesh or {}), **kw)
+        c, _, _ = solve_with_fallbacks(dict(x1d=x1d, x1h=x1h, probe_mm=probe, bottom=bottom,
+                                            **kw), p, dict(mesh or {}), fallback,
+                                       label=f"virtual experiment {seed}")
         ve.converged &= bool(c.converged)
         ve.clean[probe] = c.deflection_mm
         for r in range(ve.replicates):

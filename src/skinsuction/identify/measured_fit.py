@@ -39,7 +39,7 @@ import numpy as np
 from ._bounds import bound_flags
 from ._objectives import ratio_objective, single_objective, weighted_objective
 from ._space import GriddedSpace
-from ._window_focusing import identify_repeated
+from ._window_focusing import IdentificationError, identify_repeated
 
 __all__ = ["InputError", "OBJECTIVE_KINDS", "identify_measured", "write_identification",
            "file_sha256"]
@@ -271,7 +271,13 @@ def identify_measured(
             raise InputError(f"{measured_path}: ratio objective: {err}") from None
     wf = {"n_samples": 1000, "n_best": 20, "tolerance": 1e-6, "max_iter": 200,
           **(window_focusing or {})}
-    rep = identify_repeated(obj, repeats=int(repeats), seed=int(seed), **wf)
+    try:
+        rep = identify_repeated(obj, repeats=int(repeats), seed=int(seed), **wf)
+    except IdentificationError as err:
+        raise InputError(f"{measured_path}: beyond the simulated space: no candidate of "
+                         f"{space_info['path'] or 'the space'} has a curve over the measured "
+                         f"pressures ({err}); see the coverage frontier "
+                         "(results/tables/scale_free_coverage.csv)") from None
 
     # the runs' candidates (theta: MPa on a grid space, logs on the scale-free one)
     est_theta = np.median(rep.estimates, axis=0)
@@ -283,7 +289,11 @@ def identify_measured(
     q25, q75 = np.percentile(runs_mpa, [25, 75], axis=0)
     warnings = []
     scale_free = any(hasattr(s, "interpolant_at") for s in spaces.values())
-    flags = bound_flags(obj, est_theta, ["X1d", "X1h"],
+    # the window focusing stops near, not on, an optimum that lies on a bound: a
+    # bounded least-squares polish from the estimate tells whether the best fit of the
+    # space sits on its edge
+    best_theta = _polish(obj, est_theta)
+    flags = bound_flags(obj, best_theta, ["X1d", "X1h"],
                         ["log", "log"] if scale_free else ["relative", "relative"],
                         _bound_keys(spaces, obj, space_info))
     for f, value in zip(flags, est):
@@ -367,6 +377,27 @@ def identify_measured(
                  for x, e, n in zip(runs_mpa, rep.E, rep.iterations)],
         "warnings": warnings,
     }
+
+
+def _polish(obj, theta0) -> np.ndarray:
+    """The best fit near ``theta0`` within the space's bounds (bounded least squares)."""
+    from scipy.optimize import least_squares
+
+    lo, hi = np.asarray(obj.lower, float), np.asarray(obj.upper, float)
+    x0 = np.clip(np.asarray(theta0, dtype=float), lo, hi)
+
+    def residuals(t):
+        r = np.asarray(obj.residuals(t[None, :])[0], dtype=float)
+        return np.where(np.isfinite(r), r, 1e3)
+
+    try:
+        sol = least_squares(residuals, x0, bounds=(lo, hi), method="trf",
+                            x_scale=np.maximum(hi - lo, 1e-12) * 0.05, diff_step=1e-7,
+                            max_nfev=200)
+    except ValueError:
+        return x0
+    c0, c1 = (float(obj(np.asarray(t)[None, :])[0]) for t in (x0, sol.x))
+    return sol.x if c1 <= c0 else x0
 
 
 def _bounds_json(obj, scale_free: bool) -> dict:

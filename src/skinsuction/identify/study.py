@@ -83,6 +83,9 @@ __all__ = [
     "write_fe_in_the_loop",
     "surrogate_curve",
     "write_surrogate_space",
+    "scale_free_setup",
+    "compare_spaces",
+    "write_space_comparison",
 ]
 
 #: The paper's test point (section 3.2): X1d, X1h in MPa.
@@ -266,13 +269,18 @@ def case_seed(seed: int, *labels) -> np.random.SeedSequence:
 
 
 # ------------------------------------------------------------------ runs
-def runs_frame(rep, **labels) -> pd.DataFrame:
-    """One row per identification of a :class:`RepeatedIdentification`."""
+def runs_frame(rep, *, to_moduli=None, **labels) -> pd.DataFrame:
+    """One row per identification of a :class:`RepeatedIdentification`.
+
+    ``to_moduli`` maps the runs' candidates to (X1d, X1h) in MPa (the
+    objective's ``to_moduli``; default: they are moduli, as on a grid space).
+    """
     r = rep.results
+    x = rep.estimates if to_moduli is None else to_moduli(rep.estimates)
     frame = pd.DataFrame({
         "repeat": np.arange(len(r)),
-        "x1d": rep.estimates[:, 0],
-        "x1h": rep.estimates[:, 1],
+        "x1d": x[:, 0],
+        "x1h": x[:, 1],
         "E": rep.E,
         "E_unit": [x.E_unit for x in r],
         "cost": [x.cost for x in r],
@@ -336,10 +344,12 @@ def _repeat(setup, kind, source, repeats, seed, alpha=0.5, labels=None):
     objective = build_objective(setup, kind, source, alpha)
     rep = identify_repeated(objective, repeats=repeats, seed=case_seed(seed, source, kind, alpha),
                             **setup.window_focusing)
+    frame = runs_frame(rep, to_moduli=objective.to_moduli, source=source, objective=kind,
+                       **(labels or {}))
     log.info("%s %s%s: %d runs, median (%.6g, %.6g), median %g iterations", source, kind,
              f" alpha={alpha:g}" if kind == "weighted" else "", repeats,
-             *np.median(rep.estimates, axis=0), np.median(rep.iterations))
-    return runs_frame(rep, source=source, objective=kind, **(labels or {}))
+             frame["x1d"].median(), frame["x1h"].median(), np.median(rep.iterations))
+    return frame
 
 
 def single_probe_study(setup: StudySetup, *, repeats=100, seed=0, sources=None) -> pd.DataFrame:
@@ -810,6 +820,88 @@ def write_runs(study: str, space_path, test_curves_path, out_csv, settings: dict
     log.info("%s: %d identifications in %.1f s", study, len(runs), time.perf_counter() - t0)
     write_table(runs, out_csv)
     return runs
+
+
+def scale_free_setup(space_dir, test_curves_path, *, target=TARGET, bottom="fixed",
+                     window_focusing=None, sources=("fe",)) -> StudySetup:
+    """A :class:`StudySetup` on the scale-free space (its neo-Hookean rays).
+
+    Only the ``sources`` of the test curves are kept: the curve taken from the
+    paper grid's interpolant is not a test of another space.
+    """
+    from skinsuction.diagnose._rays import NeoHookeanSlice, read_ray_spaces
+
+    base = read_ray_spaces(space_dir)["neo_hookean"]
+    if base.spec.bottom != bottom:
+        raise ValueError(f"{space_dir}: the scale-free space has bottom {base.spec.bottom!r}, "
+                         f"not {bottom!r}")
+    curves = {k: v for k, v in read_test_curves(test_curves_path).items() if k in sources}
+    return StudySetup(spaces={p: NeoHookeanSlice(base, p) for p in base.probes_mm},
+                      curves=curves, target=np.asarray(target, dtype=float),
+                      window_focusing={**PAPER_WINDOW_FOCUSING, **(window_focusing or {})})
+
+
+def compare_spaces(setups: dict, *, objectives=tuple(OBJECTIVES), repeats=100, seed=0,
+                   alpha=0.5, source="fe", success_tolerance=0.01):
+    """The same identifications on several spaces: ``(runs, summary)``.
+
+    ``setups`` maps a space's name to its :class:`StudySetup`; every objective of
+    :data:`OBJECTIVES` is run ``repeats`` times on the ``source`` curves with the
+    same seeds on every space.  The summary has one row per (space, objective):
+    median errors in % of the truth, the success rate (both moduli within
+    ``success_tolerance``), iterations and milliseconds per identification.
+    """
+    frames = []
+    for name, setup in setups.items():
+        for kind in objectives:
+            runs = _repeat(setup, kind, source, repeats, seed, alpha)
+            runs.insert(0, "space", name)
+            frames.append(runs)
+    runs = pd.concat(frames, ignore_index=True)
+    target = next(iter(setups.values())).target
+    summary = summarise_runs(runs, target, by=("space", "objective"),
+                             success_tolerance=success_tolerance)
+    summary["ms_per_identification"] = 1e3 * summary["seconds_median"]
+    order = {k: i for i, k in enumerate(objectives)}
+    summary = summary.sort_values(["objective", "space"], key=lambda c: c.map(order)
+                                  if c.name == "objective" else c, kind="stable")
+    return runs, summary.reset_index(drop=True)
+
+
+def write_space_comparison(paper_space, scale_free_dir, test_curves_path, csv, markdown,
+                           runs_csv, settings: dict) -> pd.DataFrame:
+    """Paper grid vs scale-free space on the honest test curve: the workflow's table."""
+    from skinsuction.figures.tables import markdown_table, write_markdown
+    from skinsuction.space import write_table
+
+    target = (settings["target"]["x1d"], settings["target"]["x1h"])
+    bottom = settings.get("bottom", "fixed")
+    wf = settings.get("window_focusing")
+    setups = {
+        "paper grid": load_setup(paper_space, test_curves_path, target=target, bottom=bottom,
+                                 window_focusing=wf),
+        "scale-free": scale_free_setup(scale_free_dir, test_curves_path, target=target,
+                                       bottom=bottom, window_focusing=wf),
+    }
+    runs, summary = compare_spaces(setups, repeats=int(settings.get("repeats", 100)),
+                                   seed=int(settings.get("seed", 0)),
+                                   alpha=float(settings.get("alpha", 0.5)),
+                                   success_tolerance=float(settings.get("success_tolerance",
+                                                                        0.01)))
+    write_table(runs, runs_csv)
+    write_table(summary, csv)
+    cols = ["objective", "space", "x1d_error_median_pct", "x1h_error_median_pct",
+            "x1d_error_max_pct", "x1h_error_max_pct", "success_fraction",
+            "iterations_median", "ms_per_identification"]
+    write_markdown(markdown, "Paper grid vs scale-free space, honest test curve", [
+        (f"Test point X1d = {target[0]:g}, X1h = {target[1]:g} MPa: direct FE curves (same "
+         f"mesh and pressures as the spaces), {int(settings.get('repeats', 100))} window "
+         "focusing identifications per case with the same seeds on both spaces. Errors in % "
+         "of the truth; success: both moduli within "
+         f"{100 * float(settings.get('success_tolerance', 0.01)):g} %.", summary[cols]),
+    ])
+    log.info("space comparison:\n%s", markdown_table(summary[cols]))
+    return summary
 
 
 def write_fe_in_the_loop(space_path, out_json, settings: dict, loop: dict,

@@ -1,0 +1,116 @@
+"""Accuracy of the scale-free space against direct FE runs at random points.
+
+    python benchmarks/scale_free_accuracy.py [--space-dir results/simulated_space/scale_free]
+        [--points 120] [--seed 0] [--workers 2] [--out benchmarks/out/scale_free_accuracy.csv]
+
+Draws random points across the whole domain of the space (every model, both
+probes, X1h/X1d and the cause's value over their axes, X1d log-uniform in
+0.005-0.15 MPa, protocols to 100, 300 or 500 mbar; see
+skinsuction.diagnose._accuracy), runs the FE model there on the rays' mesh with
+their fallbacks, and compares it with the interpolated space at every pressure.
+Prints the median, 95th percentile and maximum of the relative error, of the
+absolute error and of the normalised error |dM| / max(0.2 % M, 0.3 µm) (the
+target is met where it is <= 1), per model and overall, and where the maximum is.
+Asserts nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+_SPACES = None
+
+
+def _init(space_dir):
+    global _SPACES
+    from skinsuction.diagnose import read_ray_spaces
+
+    _SPACES = read_ray_spaces(space_dir)
+
+
+def _run(point):
+    from skinsuction.diagnose._accuracy import compare_point
+
+    return compare_point(_SPACES[point.model], point)
+
+
+def _stats(values):
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    if not v.size:
+        return "n/a"
+    return (f"median {np.median(v):.3g}, 95th percentile {np.percentile(v, 95):.3g}, "
+            f"max {v.max():.3g}")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--space-dir", default="results/simulated_space/scale_free")
+    ap.add_argument("--points", type=int, default=120)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default="benchmarks/out/scale_free_accuracy.csv")
+    args = ap.parse_args(argv)
+
+    from skinsuction.diagnose import read_ray_spaces
+    from skinsuction.diagnose._accuracy import draw_points
+
+    spaces = read_ray_spaces(args.space_dir)
+    points = draw_points(spaces, args.points, seed=args.seed)
+    t0 = time.perf_counter()
+    with ProcessPoolExecutor(args.workers, initializer=_init,
+                             initargs=(args.space_dir,)) as pool:
+        records = list(pool.map(_run, points))
+    wall = time.perf_counter() - t0
+
+    rows = []
+    for r in records:
+        for p, fe, sp in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"]):
+            rows.append({k: r[k] for k in ("model", "probe_mm", "x1d", "ratio", "coordinate",
+                                           "p_max")} | {"pressure_mbar": p, "fe_mm": fe,
+                                                        "space_mm": sp})
+    per_p = pd.DataFrame(rows)
+    per_p["abs_error_um"] = 1e3 * (per_p["space_mm"] - per_p["fe_mm"]).abs()
+    per_p["relative_error"] = per_p["abs_error_um"] / (1e3 * per_p["fe_mm"].abs())
+    per_p["normalised_error"] = per_p["abs_error_um"] / np.maximum(
+        2.0 * per_p["fe_mm"].abs(), 0.3)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    per_p.to_csv(out, index=False)
+    pts = pd.DataFrame([{k: v for k, v in r.items() if not isinstance(v, list)}
+                        for r in records])
+    pts.to_csv(out.with_name(out.stem + "_points.csv"), index=False)
+
+    print(f"{len(points)} random points ({args.seed=}), {len(per_p)} pressures compared; "
+          f"FE runs {wall:.0f} s wall on {args.workers} workers")
+    print(f"FE reached the last pressure at {int(pts['fe_converged'].sum())} points "
+          f"({int((pts['fe_fallback'] > 0).sum())} on a fallback mesh)")
+    print(f"pressures where the FE run has a value but the space has none (beyond its "
+          f"coverage frontier): {int(pts['n_fe_only'].sum())} at "
+          f"{int((pts['n_fe_only'] > 0).sum())} points; the reverse: "
+          f"{int(pts['n_space_only'].sum())}")
+    for label, g in [("all", per_p), *per_p.groupby("model")]:
+        print(f"[{label}] {len(g)} pressures")
+        print(f"  relative error: {_stats(g['relative_error'])}")
+        print(f"  absolute error (µm): {_stats(g['abs_error_um'])}")
+        print(f"  normalised error |dM| / max(0.2 % M, 0.3 µm): "
+              f"{_stats(g['normalised_error'])}; "
+              f"within target at {100 * (g['normalised_error'] <= 1).mean():.1f} %")
+    worst = per_p.loc[per_p["normalised_error"].idxmax()]
+    print("largest normalised error at: " + json.dumps(
+        {k: (float(v) if isinstance(v, (float, np.floating)) else v)
+         for k, v in worst.items()}))
+    print(f"written: {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

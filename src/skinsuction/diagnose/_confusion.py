@@ -1,0 +1,194 @@
+"""The diagnosis over the physiological domain: confusion matrix and detectability.
+
+One draw (:func:`run_draw`) is a virtual experiment from a seed: X1d
+log-uniform over the physiological range, X1h/X1d log-uniform, the noise
+uniform, a pressure protocol, and the hidden effect across its physiological
+range (:data:`WIDE_DOMAIN`).  It is made by direct FE runs (both probes, the
+space's mesh), diagnosed as a user would (``diagnose_file``), and judged
+*detectable* or not independently of the diagnosis: the noise-free curves of
+the true model are fitted by the best neo-Hookean model (on the same space),
+and the effect is detectable when what the neo-Hookean model cannot absorb
+would earn the extra parameter against pure noise (chi^2 of that misfit at
+least ``-delta_bic + ln n``, the rule's threshold) and forms a pattern the
+smooth-residual test sees.  The matrix is then reported over the detectable
+draws, with the detectable fraction per cause (:func:`summarise`).
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ._causes import BASELINE, NONE
+
+__all__ = ["WIDE_DOMAIN", "draw_wide", "run_draw", "summarise", "initial_stress_kpa"]
+
+#: The physiological domain of the draws (forearm suction studies: E = 129 +- 88 kPa,
+#: X1d = E / 6; dermis 0.5-2.5 mm; natural tension up to tens of kPa; Cutometer noise
+#: 1-5 µm; protocols to 100 or 300 mbar).  Effect sizes: X2d/X1d log-uniform (the
+#: paper's own fit has about 500), t_d uniform in mm, lambda0 uniform.
+WIDE_DOMAIN = {
+    "x1d_mpa": (0.005, 0.15),
+    "x1h_over_x1d": (0.003, 0.1),
+    "noise_um": (1.0, 5.0),
+    "protocols": ((100.0, 2.0), (300.0, 5.0)),
+    "effects": {
+        "strain_stiffening": ("log", 1.0, 500.0),
+        "dermis_thickness": ("uniform", 0.5, 2.5),
+        "pre_tension": ("uniform", 1.01, 1.25),
+    },
+}
+
+
+def initial_stress_kpa(lambda0: float, x1d_mpa: float) -> float:
+    """In-plane Cauchy stress of an equibiaxial pre-stretch of the incompressible
+    neo-Hookean dermis, ``mu (lambda0^2 - lambda0^-4)`` with ``mu = 2 X1d``, in kPa."""
+    return 1e3 * 2.0 * x1d_mpa * (lambda0 ** 2 - lambda0 ** -4)
+
+
+def draw_wide(seed: int, cause, domain=None, load_max=None) -> dict:
+    """The parameters of one draw (moduli, ratio, noise, protocol, effect).
+
+    A longer protocol is drawn only where the space reaches it
+    (``p_max / X1d <= load_max``); otherwise the first (100 mbar) is used.
+    """
+    d = {**WIDE_DOMAIN, **(domain or {})}
+    rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
+    x1d = math.exp(rng.uniform(*np.log(d["x1d_mpa"])))
+    ratio = math.exp(rng.uniform(*np.log(d["x1h_over_x1d"])))
+    noise = rng.uniform(*d["noise_um"])
+    p_max, p_step = d["protocols"][rng.integers(len(d["protocols"]))]
+    if load_max is not None and p_max / x1d > load_max:  # beyond the space's reach
+        p_max, p_step = d["protocols"][0]
+    out = {"x1d": x1d, "ratio": ratio, "noise_um": noise, "p_max": p_max, "p_step": p_step,
+           "coordinate": None, "value": None}
+    if cause is not None:
+        kind, lo, hi = d["effects"][cause.name]
+        c = math.exp(rng.uniform(math.log(lo), math.log(hi))) if kind == "log" \
+            else rng.uniform(lo, hi)
+        out["coordinate"] = c
+        out["value"] = float(cause.value(c, x1d))
+    return out
+
+
+def _detectability(ve, spaces, settings, n_points):
+    """Best neo-Hookean fit to the noise-free true curves: chi^2, E, pattern test."""
+    from ._fit import FitData, fit_model
+    from ._stats import misfit_test
+
+    fd = {}
+    for probe, m in ve.clean.items():
+        p = ve.pressures_mbar
+        keep = (p > 0) & np.isfinite(m)
+        fd[probe] = FitData(probe, p[keep], np.asarray(m)[keep],
+                            math.hypot(ve.noise_um, settings.model_error_um))
+    try:
+        f = fit_model(spaces[BASELINE], fd, seed=0, repeats=1,
+                      window_focusing_options=settings.window_focusing)
+    except Exception:  # no neo-Hookean candidate covers the curve: beyond the space
+        return {"clean_chi2": math.inf, "clean_E_um": math.nan, "clean_pattern_p": 0.0,
+                "detectable": True}
+    res = {p: (fd[p].pressure_mbar, f.residual_um[p]) for p in fd}
+    sig = {p: fd[p].sigma_um for p in fd}
+    t = misfit_test(res, sig, math.inf, settings.degree, settings.alpha)
+    threshold = -settings.delta_bic + math.log(n_points)
+    return {"clean_chi2": f.chi2, "clean_E_um": f.E_um, "clean_pattern_p": t.p_value,
+            "detectable": bool(f.chi2 >= threshold and t.significant)}
+
+
+def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None) -> dict:
+    """Draw, simulate, diagnose and judge one virtual experiment: one row."""
+    from ._diagnose import BeyondSpaceError, Settings, diagnose_file
+    from ._virtual import virtual_experiment, write_csv
+
+    settings = settings or Settings()
+    base = spaces[BASELINE]
+    cause = None if truth == NONE else spaces[truth].cause
+    d = draw_wide(seed, cause, domain, base.spec.load_max)
+    p = np.arange(0.0, d["p_max"] + 1e-9, d["p_step"])
+    t0 = time.perf_counter()
+    ve = virtual_experiment(d["x1d"], d["ratio"] * d["x1d"], cause, d["value"],
+                            noise_um=d["noise_um"], seed=seed, pressures_mbar=p,
+                            mesh=base.spec.mesh, bottom=base.spec.bottom,
+                            fallback=list(base.spec.fallback))
+    row = {"truth": truth, "seed": seed, **d, "x1h": ve.x1h, "fe_converged": ve.converged,
+           "fe_seconds": time.perf_counter() - t0}
+    if truth == "pre_tension":
+        row["initial_stress_kpa"] = initial_stress_kpa(d["value"], d["x1d"])
+    if not ve.converged:
+        row["named"] = "fe_failed"
+        return row
+    row.update(_detectability(ve, spaces, settings, 2 * int((p > 0).sum())))
+    with tempfile.TemporaryDirectory() as tmp:
+        csv = write_csv(ve, Path(tmp) / "v.csv")
+        try:
+            rep = diagnose_file(csv, None, settings, spaces=spaces)
+        except BeyondSpaceError:
+            row.update(named="beyond_space", verdict="beyond_space")
+            return row
+    row.update(named=rep["cause"], verdict=rep["verdict"], cpu_seconds=rep["cpu_seconds"],
+               wall_seconds=rep["seconds"],
+               ambiguous_with=";".join(rep.get("ambiguous_with") or []),
+               beyond=";".join(f"{b['model']}:{b['parameter']}:{b['side']}"
+                               for b in rep.get("beyond_space") or []),
+               noise_est_um=rep["noise_um"],
+               base_misfit=rep["baseline"]["systematic_misfit"],
+               base_x1d=rep["baseline"]["parameters"]["X1d"],
+               base_x1h=rep["baseline"]["parameters"]["X1h"])
+    named = next((c for c in rep["candidates"] if c["cause"] == rep["cause"]), None)
+    if named is not None:
+        sym = spaces[named["cause"]].cause.symbol
+        row.update(ext_x1d=named["parameters"]["X1d"], ext_x1h=named["parameters"]["X1h"],
+                   ext_value=named["parameters"][sym], delta_bic=named["delta_bic"])
+    return row
+
+
+def summarise(rows: pd.DataFrame, causes) -> dict:
+    """Confusion matrices (all and detectable draws), rates and parameter errors."""
+    labels = [NONE, *causes]
+    rows = rows.copy()
+    for col in ("base_x1d", "ext_x1d", "ext_value", "value", "detectable", "verdict"):
+        if col not in rows:
+            rows[col] = np.nan
+    ok = rows[rows["named"] != "fe_failed"].copy()
+    ok["detectable"] = ok["detectable"].fillna(True).astype(bool)
+    det = ok[(ok["truth"] == NONE) | ok["detectable"]]
+    cols = labels + sorted(set(ok["named"]) - set(labels))
+
+    def matrix(frame):
+        return pd.crosstab(frame["truth"], frame["named"]).reindex(
+            index=labels, columns=cols, fill_value=0)
+
+    out = {"all": matrix(ok), "detectable": matrix(det)}
+    rates = []
+    for truth in labels:
+        g_all = ok[ok["truth"] == truth]
+        g = det[det["truth"] == truth]
+        r = {"truth": truth, "draws": len(g_all), "fe_failed":
+             int(((rows["truth"] == truth) & (rows["named"] == "fe_failed")).sum()),
+             "detectable": len(g) if truth != NONE else len(g_all),
+             "detectable_fraction": (len(g) / len(g_all)) if len(g_all) and truth != NONE
+             else math.nan,
+             "named_right": float((g["named"] == truth).mean()) if len(g) else math.nan,
+             "beyond_space": float((g["verdict"] == "beyond_space").mean()) if len(g) else
+             math.nan}
+        hit = g[g["named"] == truth]
+        if truth == NONE:
+            r["false_alarm"] = float((g["named"] != NONE).mean()) if len(g) else math.nan
+            r["x1d_error_median"] = float((hit["base_x1d"] / hit["x1d"] - 1).abs().median())
+        elif len(hit):
+            r["x1d_error_median"] = float((hit["ext_x1d"] / hit["x1d"] - 1).abs().median())
+            if truth == "pre_tension":
+                r["extra_error_median"] = float(((hit["ext_value"] - 1) / (hit["value"] - 1)
+                                                 - 1).abs().median())
+            else:
+                r["extra_error_median"] = float((hit["ext_value"] / hit["value"] - 1)
+                                                .abs().median())
+        rates.append(r)
+    out["rates"] = pd.DataFrame(rates)
+    return out
