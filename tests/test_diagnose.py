@@ -506,7 +506,7 @@ def test_new_modules_examples_run():
     import doctest
 
     from skinsuction.diagnose import _causes, _rays
-    from skinsuction.identify import _bounds
+    from skinsuction.identify import _bounds, _polish
 
-    for module in (_bounds, _causes, _rays):
+    for module in (_bounds, _causes, _polish, _rays):
         assert doctest.testmod(module).failed == 0, module.__name__

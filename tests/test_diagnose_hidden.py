@@ -163,3 +163,25 @@ def test_one_probe_file(ci_spaces, tmp_path):
     assert all(x["holdout_E_um"] is None for x in report["candidates"])
     assert report["baseline"]["systematic_misfit"]
     assert report["cause"] == "strain_stiffening", report["summary"]
+
+
+#: Accuracy of the coarse ci space against direct FE runs on its mesh (normalised error
+#: |dM| / max(0.2 % M, 0.3 µm)); the default space's figures are in the README.
+CI_ACCURACY = 10.0
+
+
+def test_scale_free_space_matches_direct_fe_runs(ci_spaces):
+    """A handful of random points across the domain: FE on the rays' mesh vs the space."""
+    from skinsuction.diagnose import read_ray_spaces
+    from skinsuction.diagnose._accuracy import compare_point, draw_points
+
+    space_dir, spec, causes, _ = ci_spaces
+    spaces = read_ray_spaces(space_dir)
+    records = [compare_point(spaces[pt.model], pt)
+               for pt in draw_points(spaces, 6, seed=7, x1d_range=(0.02, 0.15))]
+    compared = [r for r in records if r["n_compared"]]
+    assert len(compared) >= 5  # the draws lie inside the coverage of the space
+    worst = max(r["max_normalised_error"] for r in compared)
+    assert worst < CI_ACCURACY, [(r["model"], r["max_normalised_error"]) for r in compared]
+    # and the error is not 0 by construction: the points are off the rays
+    assert worst > 0.01

@@ -441,6 +441,34 @@ def test_no_fallback_solve_where_the_first_converges(tmp_path, stopping_model):
     assert len(calls) == 1 and frame["converged"].all() and not frame["mesh_fallback"].any()
 
 
+def test_splice_keeps_the_first_solve_and_joins_the_fallback_continuously(monkeypatch):
+    from skinsuction.space import solve_with_fallbacks
+
+    def simulate(x1d, x1h, probe_mm=6.0, bottom="fixed", pressures_mbar=None, mesh=None,
+                 iteration_budget=None, **kw):
+        params = dict(probe_mm=probe_mm, x1d=x1d, x1h=x1h)
+        if mesh.get("element") == "quad9":  # a stiffer (locking) element that converges
+            c = stand_in_curve(params, pressures_mbar)
+            return dataclasses.replace(c, deflection_mm=0.99 * c.deflection_mm)
+        return stand_in_curve(params, pressures_mbar, 40.0)
+
+    fake = types.ModuleType("skinsuction.model")
+    fake.Curve, fake.simulate = StandInCurve, simulate
+    monkeypatch.setitem(sys.modules, "skinsuction.model", fake)
+    p = np.asarray(PRESSURES)
+    params = dict(x1d=0.01, x1h=1e-4, probe_mm=6.0)
+    exact = stand_in_curve(params, p).deflection_mm
+    whole, kept, _ = solve_with_fallbacks(params, p, {}, FALLBACK)
+    spliced, kept_s, _ = solve_with_fallbacks(params, p, {}, FALLBACK, splice=True)
+    assert kept == kept_s == 1 and spliced.converged
+    np.testing.assert_allclose(whole.deflection_mm, 0.99 * exact)  # the fallback throughout
+    below = p <= 40.0
+    np.testing.assert_array_equal(spliced.deflection_mm[below], exact[below])  # first solve
+    np.testing.assert_allclose(spliced.deflection_mm[~below], exact[~below], rtol=1e-12)
+    assert spliced.info["spliced_at_mbar"] == 40.0
+    assert spliced.info["splice_factor"] == pytest.approx(1 / 0.99)
+
+
 # ------------------------------------------------------------------- provenance
 def test_source_hash_changes_with_content(tmp_path):
     (tmp_path / "model").mkdir()

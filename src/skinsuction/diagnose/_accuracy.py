@@ -107,7 +107,7 @@ def compare_point(space: RaySpace, point: AccuracyPoint) -> dict:
     p = point.pressures_mbar
     curve, kept, _ = solve_with_fallbacks(_model_keywords(space, point), p, space.spec.mesh,
                                           list(space.spec.fallback),
-                                          label=f"accuracy point {point}")
+                                          label=f"accuracy point {point}", splice=True)
     fe = np.asarray(curve.deflection_mm, dtype=float).copy()
     if not curve.converged:
         fe[~(p <= curve.last_converged_mbar)] = np.nan

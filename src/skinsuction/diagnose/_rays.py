@@ -153,7 +153,11 @@ class RaySpec:
         Largest load p / X1d of a ray (mbar/MPa); a measured curve up to
         ``p_max`` reaches X1d down to ``p_max / load_max``.
     load_steps : int
-        Load steps of a ray: nodes ``0, load_max / load_steps, ..., load_max``.
+        Load steps of a ray.
+    load_power : float
+        Spacing of the load nodes, ``q_k = load_max (k / load_steps) ** load_power``:
+        1 is even; 1.5 puts finer steps at small loads, where a strongly stiffening
+        dermis bends M(p) most, and coarser ones at large loads, where M(p) is smooth.
     x1d_range : (float, float)
         Search window of X1d (MPa) of the fits; its lower end is raised to
         ``p_max / load_max`` for a curve up to ``p_max``.
@@ -172,6 +176,7 @@ class RaySpec:
     ratio_nodes: tuple
     load_max: float
     load_steps: int = 40
+    load_power: float = 1.0
     x1d_range: tuple = (0.001, 1.0)
     x1d_ref: float = 0.01
     bottom: str = "fixed"
@@ -195,6 +200,9 @@ class RaySpec:
         if int(self.load_steps) < 3 or int(self.load_steps) != self.load_steps:
             raise ValueError(f"load_steps must be a whole number >= 3, got {self.load_steps}")
         set_(self, "load_steps", int(self.load_steps))
+        if not 0.5 <= float(self.load_power) <= 3:
+            raise ValueError(f"load_power must lie in [0.5, 3], got {self.load_power}")
+        set_(self, "load_power", float(self.load_power))
         if not float(self.x1d_ref) > 0:
             raise ValueError(f"x1d_ref must be positive, got {self.x1d_ref}")
         set_(self, "x1d_ref", float(self.x1d_ref))
@@ -206,7 +214,8 @@ class RaySpec:
     @property
     def load_nodes(self) -> np.ndarray:
         """The loads p / X1d of a ray (mbar/MPa)."""
-        return np.linspace(0.0, self.load_max, self.load_steps + 1)
+        k = np.arange(self.load_steps + 1) / self.load_steps
+        return self.load_max * k ** self.load_power
 
     @property
     def pressures_mbar(self) -> tuple:
@@ -236,6 +245,7 @@ class RaySpec:
             ratio_nodes=expand_axis(section["ratio"]),
             load_max=load["max"],
             load_steps=load.get("steps", 40),
+            load_power=load.get("power", 1.0),
             x1d_range=(section["x1d_mpa"]["min"], section["x1d_mpa"]["max"]),
             x1d_ref=section.get("x1d_ref", 0.01),
             bottom=section.get("bottom", "fixed"),
@@ -246,6 +256,7 @@ class RaySpec:
     def to_dict(self) -> dict:
         return {"probes_mm": list(self.probes_mm), "ratio_nodes": list(self.ratio_nodes),
                 "load_max": self.load_max, "load_steps": self.load_steps,
+                "load_power": self.load_power,
                 "x1d_range": list(self.x1d_range), "x1d_ref": self.x1d_ref,
                 "bottom": self.bottom, "mesh": dict(self.mesh),
                 "fallback": [dict(f) for f in self.fallback]}
@@ -315,7 +326,7 @@ def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=Non
     extras = {k: params[k] for k in EXTRA_KEYWORDS if params[k] != EXTRA_KEYWORDS[k]}
     axes = {k: params[k] for k in AXES}
     curve, kept, first_reason = solve_with_fallbacks({**axes, **extras}, pressures_mbar, mesh,
-                                                     fallback, label=f"ray {rid}")
+                                                     fallback, label=f"ray {rid}", splice=True)
     frame = curve_frame(curve, axes)
     for k in EXTRA_KEYWORDS:
         frame[k] = float(params[k])
@@ -799,8 +810,8 @@ class NeoHookeanSlice:
         self.space.rays(probe_mm)  # KeyError naming the probes if absent
         self.probe_mm = float(probe_mm)
 
-    def interpolant_at(self, pressure_mbar) -> RayInterpolant:
-        return RayInterpolant(self.space, self.probe_mm, pressure_mbar)
+    def interpolant_at(self, pressure_mbar) -> "TabulatedInterpolant":
+        return TabulatedInterpolant(self.space, self.probe_mm, pressure_mbar)
 
     @staticmethod
     def to_moduli(theta) -> np.ndarray:
@@ -814,3 +825,50 @@ class NeoHookeanSlice:
         """Candidates theta of (N, 2) moduli X1d, X1h in MPa."""
         x = np.atleast_2d(np.asarray(x, dtype=float))
         return np.stack([np.log10(x[:, 0]), np.log10(x[:, 1] / x[:, 0])], axis=1)
+
+
+class TabulatedInterpolant:
+    """The neo-Hookean space of one probe at fixed pressures, tabulated for speed.
+
+    The rays are read once (:class:`RayInterpolant`) on a fine grid of
+    ``log10 X1d`` (``step`` decades, over the X1d window) times the ratio nodes,
+    at the measured pressures; candidates are then interpolated by the 4 x 4
+    cubic stencils of the identification (:class:`skinsuction.identify.SpaceInterpolant`,
+    NaN policy "shift") on ``log M``, exactly as the paper grid is, so one
+    iteration of the window focusing costs what it costs on the paper grid.
+    Along log X1d the table is much finer than M varies (0.01 decades: M moves
+    by about 2 % between nodes), so it adds an error far below the rays' own.
+
+    Attributes
+    ----------
+    lower, upper : ndarray (2,)
+        Bounds of theta = (log10 X1d, log10 X1h/X1d), as :class:`RayInterpolant`'s.
+    """
+
+    def __init__(self, space: RaySpace, probe_mm: float, pressure_mbar, step: float = 0.01):
+        from skinsuction.identify import GriddedSpace, SpaceInterpolant
+
+        rays = RayInterpolant(space, probe_mm, pressure_mbar)
+        if rays.d != 2:
+            raise ValueError("only the neo-Hookean space is tabulated")
+        self.lower, self.upper = rays.lower, rays.upper
+        self.pressure_mbar = rays.pressure_mbar
+        n = max(4, int(math.ceil((self.upper[0] - self.lower[0]) / step)) + 1)
+        lx = np.linspace(self.lower[0], self.upper[0], n)
+        lr = np.log10(np.asarray(space.spec.ratio_nodes))
+        grid = np.stack(np.meshgrid(lx, lr, indexing="ij"), axis=-1).reshape(-1, 2)
+        self._pos = self.pressure_mbar > 0
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = np.log(rays(grid)[:, self._pos])
+        g[~np.isfinite(g)] = np.nan
+        table = GriddedSpace(lx, lr, self.pressure_mbar[self._pos],
+                             g.reshape(n, lr.size, -1), probe_mm)
+        self._log_m = SpaceInterpolant(table, "shift")
+
+    def __call__(self, candidates, out=None) -> np.ndarray:
+        cand = np.atleast_2d(np.asarray(candidates, dtype=float))
+        if out is None:
+            out = np.empty((cand.shape[0], self.pressure_mbar.size))
+        out[:, ~self._pos] = 0.0
+        out[:, self._pos] = np.exp(self._log_m(cand))
+        return out

@@ -97,7 +97,7 @@ def virtual_experiment(x1d, x1h, cause: Cause | None = None, value=None, *, nois
     for probe in ve.probes_mm:
         c, _, _ = solve_with_fallbacks(dict(x1d=x1d, x1h=x1h, probe_mm=probe, bottom=bottom,
                                             **kw), p, dict(mesh or {}), fallback,
-                                       label=f"virtual experiment {seed}")
+                                       label=f"virtual experiment {seed}", splice=True)
         ve.converged &= bool(c.converged)
         ve.clean[probe] = c.deflection_mm
         for r in range(ve.replicates):

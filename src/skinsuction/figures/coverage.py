@@ -63,7 +63,8 @@ def plot_coverage(frontier, *paths):
                     ax.set_yticks(range(coords.size))
                     ax.set_yticklabels([f"{x:g}" for x in coords])
                 n_short = int((z < load_max * (1 - 1e-9)).sum())
-                ax.set_title(f"{probe:g} mm, {model}: {n_short} of {z.size} short", fontsize=8)
+                ax.set_title(f"{probe:g} mm, {model.replace('_', ' ')}\n{n_short} of {z.size} rays short",
+                             fontsize=7)
                 if r == len(probes) - 1:
                     ax.set_xlabel("X1h / X1d")
                 panel_label(ax, f"({next(letters)})")

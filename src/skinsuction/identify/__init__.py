@@ -18,6 +18,7 @@ Examples
 """
 
 from ._bounds import BOUND_FRACTION, bound_flags
+from ._polish import polish
 from ._baselines import BaselineResult, differential_evolution_fit, least_squares_from_random_starts
 from ._interpolate import LagrangeAxis, SpaceInterpolant, evaluate, interpolate_pressure
 from ._objectives import (
@@ -51,6 +52,7 @@ from ._window_focusing import (
 __all__ = [
     "GriddedSpace",
     "bound_flags",
+    "polish",
     "BOUND_FRACTION",
     "LagrangeAxis",
     "SpaceInterpolant",

@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ._bounds import bound_flags
+from ._polish import polish
 from ._objectives import ratio_objective, single_objective, weighted_objective
 from ._space import GriddedSpace
 from ._window_focusing import IdentificationError, identify_repeated
@@ -281,19 +282,20 @@ def identify_measured(
 
     # the runs' candidates (theta: MPa on a grid space, logs on the scale-free one)
     est_theta = np.median(rep.estimates, axis=0)
-    j_est = float(obj(est_theta.reshape(1, 2))[0])
-    e_est = float(obj.error(j_est))
     best = int(np.argmin(rep.E))
     runs_mpa = obj.to_moduli(rep.estimates)
-    est = obj.to_moduli(est_theta)[0]
     q25, q75 = np.percentile(runs_mpa, [25, 75], axis=0)
     warnings = []
     scale_free = any(hasattr(s, "interpolant_at") for s in spaces.values())
-    # the window focusing stops near, not on, an optimum that lies on a bound: a
-    # bounded least-squares polish from the estimate tells whether the best fit of the
-    # space sits on its edge
-    best_theta = _polish(obj, est_theta)
-    flags = bound_flags(obj, best_theta, ["X1d", "X1h"],
+    # the window focusing stops near, not on, the minimum of a flat valley or of a
+    # bound: a bounded least-squares polish from the median finishes the job (and
+    # tells whether the best fit of the space sits on its edge)
+    wf_est = obj.to_moduli(est_theta)[0]
+    est_theta = polish(obj, est_theta)
+    j_est = float(obj(est_theta.reshape(1, 2))[0])
+    e_est = float(obj.error(j_est))
+    est = obj.to_moduli(est_theta)[0]
+    flags = bound_flags(obj, est_theta, ["X1d", "X1h"],
                         ["log", "log"] if scale_free else ["relative", "relative"],
                         _bound_keys(spaces, obj, space_info))
     for f, value in zip(flags, est):
@@ -352,7 +354,9 @@ def identify_measured(
                                         if objective == "ratio" else []),
         },
         "estimate": {"x1d_mpa": float(est[0]), "x1h_mpa": float(est[1]),
-                     "statistic": "median over the repeats"},
+                     "statistic": "median over the repeats, polished by bounded least "
+                                  "squares within the space",
+                     "window_focusing_median_mpa": [float(wf_est[0]), float(wf_est[1])]},
         "at_bound": {f["parameter"]: f for f in flags},
         "best_run": {"x1d_mpa": float(runs_mpa[best, 0]),
                      "x1h_mpa": float(runs_mpa[best, 1]), "E": float(rep.E[best])},
@@ -377,27 +381,6 @@ def identify_measured(
                  for x, e, n in zip(runs_mpa, rep.E, rep.iterations)],
         "warnings": warnings,
     }
-
-
-def _polish(obj, theta0) -> np.ndarray:
-    """The best fit near ``theta0`` within the space's bounds (bounded least squares)."""
-    from scipy.optimize import least_squares
-
-    lo, hi = np.asarray(obj.lower, float), np.asarray(obj.upper, float)
-    x0 = np.clip(np.asarray(theta0, dtype=float), lo, hi)
-
-    def residuals(t):
-        r = np.asarray(obj.residuals(t[None, :])[0], dtype=float)
-        return np.where(np.isfinite(r), r, 1e3)
-
-    try:
-        sol = least_squares(residuals, x0, bounds=(lo, hi), method="trf",
-                            x_scale=np.maximum(hi - lo, 1e-12) * 0.05, diff_step=1e-7,
-                            max_nfev=200)
-    except ValueError:
-        return x0
-    c0, c1 = (float(obj(np.asarray(t)[None, :])[0]) for t in (x0, sol.x))
-    return sol.x if c1 <= c0 else x0
 
 
 def _bounds_json(obj, scale_free: bool) -> dict:
