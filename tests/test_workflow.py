@@ -244,6 +244,54 @@ def test_reruns_follow_config_and_code_changes(stand_in_run):
     assert job_counts(snakemake(workdir, "-n", *args)) == {"fig3_boundary_conditions": 1, "all": 1}
 
 
+# ------------------------------------------ the scale-free space, stand-in model
+TINY_SCALE_FREE = {
+    **TINY,
+    "scale_free_space": {
+        "probes_mm": [6],
+        "ratio": [0.001, 0.01, 0.1],
+        "load": {"max": 200, "steps": 5, "refine": 2},  # + loads 10, 20 (the onset solve)
+        "x1d_mpa": {"min": 0.1, "max": 10.0},
+        "x1d_ref": 0.5,  # X1h = 0.05 MPa at the last ratio: the stand-in stops at 20 mbar
+        "causes": {"strain_stiffening": {"keyword": "x2d", "symbol": "X2d", "unit": "MPa",
+                                         "modulus": True, "neutral": 0.0, "scale": "log1p",
+                                         "nodes": [0.0, 3.0, 10.0]}},
+    },
+}
+
+
+def test_stand_in_scale_free_space_bundles_assembly_and_coverage(tmp_path):
+    from skinsuction.diagnose import read_ray_spaces
+
+    workdir = copy_workflow(tmp_path)
+    model = workdir / "src" / "skinsuction" / "model"
+    shutil.rmtree(model, ignore_errors=True)
+    model.mkdir()
+    (model / "__init__.py").write_text(STAND_IN_MODEL)
+    args = write_config(workdir, "tiny_sf", TINY_SCALE_FREE)
+    counts = job_counts(snakemake(workdir, "--cores", "2", *args, "scale_free_space"))
+    # one job per (model, probe, ratio); the neutral rays once, in the neo-Hookean bundles
+    assert counts["simulate_ray_bundle"] == 2 * 3
+    assert counts["assemble_scale_free_space"] == 2 and counts["scale_free_coverage"] == 1
+    spaces = read_ray_spaces(workdir / "results" / "simulated_space" / "scale_free")
+    assert set(spaces) == {"neo_hookean", "strain_stiffening"}
+    assert spaces["strain_stiffening"].rays(6.0).shape == (3, 3, 8)
+    assert np.isfinite(spaces["neo_hookean"].rays(6.0)[:, 0, :3]).all()  # 0 and the onset
+    cov = pd.read_csv(workdir / "results" / "tables" / "scale_free_coverage.csv")
+    short = cov[~cov["complete"]]
+    # the stand-in stops at 20 mbar for X1h >= 0.05 MPa: p/X1d = 40 at the last ratio
+    assert set(short["ratio"]) == {0.1} and (short["load_reached"] == 40.0).all()
+    assert (short["reason"] == "too many cut-backs").all()
+    assert (workdir / "results" / "figures" / "scale_free_coverage.png").stat().st_size > 0
+    assert "Nothing to be done" in snakemake(workdir, "-n", *args, "scale_free_space")
+    # a new cause node reruns the bundles of that cause only
+    more = json.loads(json.dumps(TINY_SCALE_FREE))
+    more["scale_free_space"]["causes"]["strain_stiffening"]["nodes"].append(30.0)
+    counts = job_counts(snakemake(workdir, "-n", *write_config(workdir, "more", more),
+                                  "scale_free_space"))
+    assert counts["simulate_ray_bundle"] == 3
+
+
 # --------------------------------------------------------- end to end, real model
 REAL_TINY = {
     "spaces": {"tiny": {"probes_mm": [6], "x1d": [0.05], "x1h": [1.0e-3]}},

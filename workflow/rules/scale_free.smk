@@ -75,6 +75,7 @@ rule simulate_ray_bundle:
         # a change of any of these reruns the FE jobs (Snakemake's params trigger)
         rays=lambda w: SF_BUNDLES[w.bundle],
         pressures=list(SF_SPEC.pressures_mbar),
+        onset=list(SF_SPEC.onset_mbar),
         mesh=SF_SPEC.mesh,
         fallback=[dict(f) for f in SF_SPEC.fallback],
         # the model, and the fallback chain and curve format in space.py
