@@ -76,8 +76,8 @@ def main(argv=None):
     from skinsuction.measured import load_measured
 
     cfg = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
-    d = cfg["diagnosis"]
-    spec = RaySpec.from_config(d, cfg.get("mesh"))
+    d = cfg["scale_free_space"]
+    spec = RaySpec.from_config(d, cfg.get("mesh"), cfg.get("mesh_fallback"))
     causes = registry_from_config(d["causes"])
     causes["hypodermis_stiffening"] = Cause(
         "hypodermis_stiffening", "x2h", "X2h", "MPa", True, 0.0, tuple(X2H_NODES),

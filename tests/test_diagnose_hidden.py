@@ -185,3 +185,39 @@ def test_scale_free_space_matches_direct_fe_runs(ci_spaces):
     assert worst < CI_ACCURACY, [(r["model"], r["max_normalised_error"]) for r in compared]
     # and the error is not 0 by construction: the points are off the rays
     assert worst > 0.01
+
+
+#: The physiological domain of the confusion benchmark (skinsuction.diagnose._confusion),
+#: within the coarse ci space's axes (X2d/X1d to 30, t_d 0.6-2.2 mm).
+CI_DOMAIN = {
+    "x1d_mpa": (0.008, 0.15),
+    "x1h_over_x1d": (0.003, 0.1),
+    "noise_um": (1.0, 5.0),
+    "protocols": ((100.0, 2.0), (300.0, 5.0)),
+    "effects": {"strain_stiffening": ("log", 2.0, 28.0),
+                "dermis_thickness": ("uniform", 0.65, 2.1),
+                "pre_tension": ("uniform", 1.02, 1.24)},
+}
+
+
+@pytest.mark.parametrize("cause,seed", [(c, s) for c in (NONE, "strain_stiffening",
+                                                          "dermis_thickness", "pre_tension")
+                                        for s in (31, 32)])
+def test_wide_domain_effect_is_named_where_detectable(ci_spaces, cause, seed):
+    """Draws across the physiological domain: a detectable effect is named (or tied),
+    an undetectable one is not mistaken for another cause, and neo-Hookean skin gets
+    no false alarm."""
+    from skinsuction.diagnose import Settings, read_ray_spaces
+    from skinsuction.diagnose._confusion import run_draw
+
+    space_dir, spec, causes, _ = ci_spaces
+    spaces = read_ray_spaces(space_dir)
+    row = run_draw(cause, seed, spaces, Settings(repeats=1), CI_DOMAIN)
+    assert row["named"] != "fe_failed", row
+    tied = set(filter(None, str(row.get("ambiguous_with") or "").split(";")))
+    if cause == NONE:
+        assert row["named"] == NONE and row["verdict"] == "neo_hookean_fits", row
+    elif row["detectable"]:
+        assert row["named"] == cause or cause in tied, row
+    else:
+        assert row["named"] in (NONE, cause), row

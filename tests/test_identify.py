@@ -377,3 +377,21 @@ def test_baselines_recover_the_paper_parameters(s6, fit):
     assert r.success and r.n_evaluations > 0 and r.seconds > 0
     np.testing.assert_allclose(r.estimate, TRUTH, rtol=1e-3)
     assert np.isclose(r.cost, obj([r.estimate])[0])
+
+
+def test_compare_spaces_runs_every_objective_with_and_without_polish():
+    from skinsuction.identify import analytic_surrogate_space, evaluate
+    from skinsuction.identify.study import StudySetup, compare_spaces
+
+    s = {p: analytic_surrogate_space(p) for p in (2.0, 6.0)}
+    # a curve between grid nodes: the window focusing alone stops short of it
+    truth = [0.0055, 0.00041]
+    curves = {"fe": {p: (s[p].pressure_mbar, evaluate(s[p], [truth])[0]) for p in s}}
+    runs, summary = compare_spaces({"surrogate": StudySetup(s, curves)}, repeats=4, seed=1)
+    assert len(runs) == 4 * 4 * 2
+    assert set(summary["method"]) == {"window focusing", "window focusing + polish"}
+    by = summary.set_index(["objective", "method"])
+    for kind in ("single_6mm", "weighted"):
+        wf = abs(by.loc[(kind, "window focusing"), "x1d_error_median_pct"])
+        pol = abs(by.loc[(kind, "window focusing + polish"), "x1d_error_median_pct"])
+        assert pol <= wf + 1e-6 and pol < 0.01

@@ -847,24 +847,41 @@ def compare_spaces(setups: dict, *, objectives=tuple(OBJECTIVES), repeats=100, s
 
     ``setups`` maps a space's name to its :class:`StudySetup`; every objective of
     :data:`OBJECTIVES` is run ``repeats`` times on the ``source`` curves with the
-    same seeds on every space.  The summary has one row per (space, objective):
-    median errors in % of the truth, the success rate (both moduli within
+    same seeds on every space, and each run is also polished by bounded least
+    squares (:func:`skinsuction.identify.polish`, what ``skinsuction identify``
+    does to its estimate).  The summary has one row per (space, objective,
+    method): median errors in % of the truth, the success rate (both moduli within
     ``success_tolerance``), iterations and milliseconds per identification.
     """
+    from ._polish import polish
+
     frames = []
     for name, setup in setups.items():
         for kind in objectives:
-            runs = _repeat(setup, kind, source, repeats, seed, alpha)
-            runs.insert(0, "space", name)
-            frames.append(runs)
+            obj = build_objective(setup, kind, source, alpha)
+            rep = identify_repeated(obj, repeats=repeats, seed=case_seed(seed, source, kind, alpha),
+                                    **setup.window_focusing)
+            wf = runs_frame(rep, to_moduli=obj.to_moduli, space=name, objective=kind,
+                            method="window focusing")
+            t0 = time.perf_counter()
+            polished = np.array([polish(obj, t) for t in rep.estimates])
+            per_run = (time.perf_counter() - t0) / len(polished)
+            pol = wf.copy()
+            pol["method"] = "window focusing + polish"
+            pol[["x1d", "x1h"]] = obj.to_moduli(polished)
+            pol["seconds"] = wf["seconds"] + per_run
+            frames += [wf, pol]
+            log.info("%s, %s: median X1d %.6g (WF) / %.6g (polished)", name, kind,
+                     wf["x1d"].median(), pol["x1d"].median())
     runs = pd.concat(frames, ignore_index=True)
     target = next(iter(setups.values())).target
-    summary = summarise_runs(runs, target, by=("space", "objective"),
+    summary = summarise_runs(runs, target, by=("space", "objective", "method"),
                              success_tolerance=success_tolerance)
     summary["ms_per_identification"] = 1e3 * summary["seconds_median"]
     order = {k: i for i, k in enumerate(objectives)}
-    summary = summary.sort_values(["objective", "space"], key=lambda c: c.map(order)
-                                  if c.name == "objective" else c, kind="stable")
+    summary = summary.sort_values(["objective", "method", "space"],
+                                  key=lambda c: c.map(order) if c.name == "objective" else c,
+                                  kind="stable")
     return runs, summary.reset_index(drop=True)
 
 
@@ -890,7 +907,7 @@ def write_space_comparison(paper_space, scale_free_dir, test_curves_path, csv, m
                                                                         0.01)))
     write_table(runs, runs_csv)
     write_table(summary, csv)
-    cols = ["objective", "space", "x1d_error_median_pct", "x1h_error_median_pct",
+    cols = ["objective", "method", "space", "x1d_error_median_pct", "x1h_error_median_pct",
             "x1d_error_max_pct", "x1h_error_max_pct", "success_fraction",
             "iterations_median", "ms_per_identification"]
     write_markdown(markdown, "Paper grid vs scale-free space, honest test curve", [
