@@ -176,7 +176,7 @@ DEFAULT_CAUSES = {
     ),
     "dermis_thickness": dict(
         keyword="t_d", symbol="t_d", unit="mm", modulus=False, neutral=1.0, scale="log",
-        nodes=[0.4, 0.6, 1.0, 1.5, 2.2, 3.0],
+        nodes=[0.4, 0.5, 0.6, 0.75, 1.0, 1.2, 1.5, 1.8, 2.2, 2.6, 3.0],
         hypothesis="the dermis is not 1 mm thick (in vivo about 0.5-2.5 mm with site "
                    "and age)",
         description="thickness of the dermis with the epidermis (mm)",
