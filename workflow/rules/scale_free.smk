@@ -34,11 +34,15 @@ SF_DIR = "results/simulated_space/scale_free"
 SF_SPACES = expand(f"{SF_DIR}/{{model}}.parquet", model=SF_MODELS)
 
 
-def sf_bundles_of(model):
-    """Bundle files that hold the rays of one model (its own and the neutral rays)."""
-    own = [b for b in SF_BUNDLES if b.startswith(f"{model}__")]
-    neutral = [b for b in SF_BUNDLES if b.startswith(f"{BASELINE}__")]
-    return [f"{SF_DIR}/rays/{b}.parquet" for b in dict.fromkeys(own + neutral)]
+# bundle files that hold the rays of each model: its own and the neutral (neo-Hookean) ones
+SF_MODEL_BUNDLES = {
+    model: [
+        f"{SF_DIR}/rays/{b}.parquet"
+        for b in SF_BUNDLES
+        if b.startswith(f"{model}__") or b.startswith(f"{BASELINE}__")
+    ]
+    for model in SF_MODELS
+}
 
 
 wildcard_constraints:
@@ -92,7 +96,7 @@ rule simulate_ray_bundle:
 
 rule assemble_scale_free_space:
     input:
-        bundles=lambda w: sf_bundles_of(w.model),
+        bundles=lambda w: SF_MODEL_BUNDLES[w.model],
     output:
         space=f"{SF_DIR}/{{model}}.parquet",
     log:
