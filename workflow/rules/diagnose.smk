@@ -191,3 +191,49 @@ rule fig6_measured_vs_simulated:
         "../envs/skinsuction.yaml"
     script:
         "../scripts/fig6_measured_vs_simulated.py"
+
+
+if "confusion" in DG:
+    DIAGNOSIS_OUTPUTS += [
+        "results/figures/detectability_map.png",
+        "results/tables/diagnosis_confusion_detectable.csv",
+    ]
+
+    rule detectability_map:
+        """Diagnosis over the physiological domain: confusion matrix and detectability map."""
+        input:
+            spaces=SF_SPACES,
+        output:
+            draws="results/diagnosis/confusion_draws.csv",
+            matrix=report(
+                "results/tables/diagnosis_confusion_detectable.csv",
+                caption="../report/detectability.rst",
+                category="Diagnosis",
+                labels={"table": "confusion matrix (detectable draws)"},
+            ),
+            rates="results/tables/diagnosis_confusion_rates.csv",
+            png=report(
+                "results/figures/detectability_map.png",
+                caption="../report/detectability.rst",
+                category="Diagnosis",
+                labels={"figure": "detectability map"},
+            ),
+            pdf="results/figures/detectability_map.pdf",
+        log:
+            "logs/diagnosis/detectability_map.log",
+        benchmark:
+            "results/benchmarks/diagnosis/detectability_map.tsv"
+        params:
+            per_cause=DG["confusion"]["per_cause"],
+            seed=DG["confusion"].get("seed", 1000),
+            decision=DG.get("decision", {}),
+            fit=DG.get("fit", {}),
+            code=code_hash("diagnose", "identify", "model", "figures", "space.py"),
+        threads: 1
+        resources:
+            mem_mb=3000,
+            runtime=120,
+        conda:
+            "../envs/skinsuction.yaml"
+        script:
+            "../scripts/detectability_map.py"

@@ -26,7 +26,8 @@ import pandas as pd
 
 from ._causes import BASELINE, NONE
 
-__all__ = ["WIDE_DOMAIN", "draw_wide", "run_draw", "summarise", "initial_stress_kpa"]
+__all__ = ["WIDE_DOMAIN", "draw_wide", "run_draw", "run_draws", "summarise",
+           "initial_stress_kpa"]
 
 #: The physiological domain of the draws (forearm suction studies: E = 129 +- 88 kPa,
 #: X1d = E / 6; dermis 0.5-2.5 mm; natural tension up to tens of kPa; Cutometer noise
@@ -192,3 +193,19 @@ def summarise(rows: pd.DataFrame, causes) -> dict:
         rates.append(r)
     out["rates"] = pd.DataFrame(rates)
     return out
+
+
+def run_draws(spaces: dict, per_cause: int, seed: int = 1000, settings=None) -> pd.DataFrame:
+    """``per_cause`` draws for ``none`` and every cause of ``spaces``: one row each.
+
+    Seeds are ``seed + 100000 k + i`` for the k-th true cause (``none`` first), as in
+    ``benchmarks/diagnose_confusion.py``.
+    """
+    causes = [n for n in spaces if n != BASELINE]
+    rows = [run_draw(truth, seed + 100000 * k + i, spaces, settings)
+            for k, truth in enumerate([NONE, *causes]) for i in range(int(per_cause))]
+    df = pd.DataFrame(rows)
+    for col in ("cpu_seconds", "wall_seconds", "verdict", "detectable"):
+        if col not in df:
+            df[col] = np.nan
+    return df

@@ -1,0 +1,24 @@
+"""Rule detectability_map: the diagnosis over the physiological domain (confusion, map)."""
+
+from skinsuction._threads import limit_threads
+
+limit_threads(1)
+
+from skinsuction.provenance import log_to_file  # noqa: E402
+
+with log_to_file(snakemake.log[0]):
+    from pathlib import Path
+
+    from skinsuction.diagnose import Settings, read_ray_space
+    from skinsuction.diagnose._confusion import run_draws, summarise
+    from skinsuction.figures.detectability import plot_detectability
+    from skinsuction.space import write_table
+
+    spaces = {s.name: s for s in map(read_ray_space, snakemake.input.spaces)}
+    settings = Settings.from_config(snakemake.params.decision, snakemake.params.fit)
+    rows = run_draws(spaces, snakemake.params.per_cause, snakemake.params.seed, settings)
+    write_table(rows, snakemake.output.draws)
+    s = summarise(rows, [n for n in spaces if n != "neo_hookean"])
+    write_table(s["detectable"].reset_index(), snakemake.output.matrix)
+    write_table(s["rates"], snakemake.output.rates)
+    plot_detectability(rows, snakemake.output.png, snakemake.output.pdf)
