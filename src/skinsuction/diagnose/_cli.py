@@ -2,7 +2,7 @@
 
 ::
 
-    skinsuction diagnose MEASURED.csv --out DIR [--space-dir results/diagnosis/spaces]
+    skinsuction diagnose MEASURED.csv --out DIR [--space results/simulated_space/scale_free]
         [--noise-um SD] [--alpha 0.01] [--delta-bic -10] [--seed 0] [--repeats 2]
 
 Bad input (file, spaces) raises ``ValueError`` subclasses with one-line messages

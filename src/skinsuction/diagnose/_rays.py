@@ -1,38 +1,38 @@
-"""Ray spaces: extended simulated spaces stored as FE rays, thanks to the scaling law.
+"""The scale-free simulated space: FE rays, thanks to the scaling law.
 
 The model obeys ``M(s X1d, s X1h, s X2d, s X2h, s p; t_d, t_h, lambda0) =
 M(X1d, X1h, X2d, X2h, p; t_d, t_h, lambda0)`` (tested in tests/test_model.py).
-With ``r = X1h / X1d`` and the cause's dimensionless coordinate ``c``
-(``X2d / X1d``, ``t_d`` or ``lambda0``, see :mod:`._causes`),
+With ``r = X1h / X1d``, the cause's dimensionless coordinate ``c``
+(``X2d / X1d``, ``t_d`` or ``lambda0``, see :mod:`._causes`) and the load
+``q = p / X1d``,
 
-    M(X1d, r, c, p) = R(r, c, p * X1d_ref / X1d),
+    M(X1d, r, c, p) = R(r, c, q = p / X1d),
 
-where ``R(r, c, .)`` is *one* FE curve (a ray) run at ``X1d = X1d_ref``.  So a
-space over (X1d, X1h, c) needs FE runs on the 2-D grid (r, c) only, and the
-neo-Hookean space a 1-D set of rays over r.  The rays are run at the smallest
-X1d of the search range (``X1d_ref = X1d_min``) up to the largest measured
-pressure, so a candidate X1d >= X1d_ref reads its ray at pressures
-``p X1d_ref / X1d <= p``: the ray is an ordinary FE curve.  Where the FE run
-stopped early (large deflections at small X1d and soft hypodermis) the ray is
-NaN beyond, and candidates that need that part get cost +inf.
+where ``R(r, c, .)`` is *one* FE curve (a ray) run at ``X1d = x1d_ref`` to
+``q = load_max`` (:class:`RaySpec`).  So a space over (X1d, X1h, c, p) needs FE
+runs on the 2-D grid (r, c) only, and the neo-Hookean space a 1-D set of rays
+over r; a curve up to ``p_max`` is covered for ``X1d >= p_max / load_max``.
+Where a ray stopped early (large deflections over a very soft hypodermis) it is
+NaN beyond, candidates that need that part get cost +inf, and the stop is
+recorded (:func:`coverage_frontier`).
 
 Interpolation (:class:`RayInterpolant`):
 
-* across rays, cubic Lagrange in ``log10 r`` and in ``c`` (the
-  :class:`skinsuction.identify.LagrangeAxis` of the identification), applied to
-  ``log M`` (the deflection varies by decades over r; its logarithm is close
-  to a smooth sigmoid in log r, several times more accurately interpolated than
-  M itself), at the ray pressures;
-* then along the pressure of the ray, cubic Lagrange on M at ``p X1d_ref / X1d``.
+* across rays, cubic Lagrange in ``log10 r`` and in the cause's axis
+  coordinate (:meth:`Cause.to_axis`), applied to ``log M`` (the deflection
+  varies by decades over r; its logarithm is close to a smooth sigmoid in
+  log r), at the ray loads;
+* then along the load of the ray, cubic Lagrange on M at ``q``.
 
-Each candidate first combines its 4 x 4 stencil of rays on the whole ray
-pressure axis, then reads the combined ray at its own pressures, so the cost of
-a call is ``N (16 n_p + 4 u)``.
+The identification tabulates the neo-Hookean rays of a probe once per curve
+(:class:`TabulatedInterpolant`).
 
-Storage: one Parquet file per cause (``results/diagnosis/spaces/<cause>.parquet``)
-with one row per (probe, r, c, pressure) and the cause, the axes and the
-provenance in the schema metadata; the neo-Hookean space ``neo_hookean.parquet``
-holds the rays at the neutral coordinate of every cause (the same FE runs).
+Storage: the FE jobs write bundles of rays (one per model, probe and r,
+:func:`ray_bundles`); :func:`assemble_ray_space` writes one Parquet file per
+model (``results/simulated_space/scale_free/<model>.parquet``) with one row
+per (probe, r, c, pressure) and the cause, the axes, the coverage and the
+provenance in the schema metadata; ``neo_hookean.parquet`` holds the rays at
+the neutral coordinate of every cause (the same FE runs).
 """
 
 from __future__ import annotations
