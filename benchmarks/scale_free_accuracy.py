@@ -61,7 +61,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
 
     from skinsuction.diagnose import read_ray_spaces
-    from skinsuction.diagnose._accuracy import draw_points
+    from skinsuction.diagnose._accuracy import draw_points, normalised_error
 
     spaces = read_ray_spaces(args.space_dir)
     points = draw_points(spaces, args.points, seed=args.seed)
@@ -80,8 +80,7 @@ def main(argv=None):
     per_p = pd.DataFrame(rows)
     per_p["abs_error_um"] = 1e3 * (per_p["space_mm"] - per_p["fe_mm"]).abs()
     per_p["relative_error"] = per_p["abs_error_um"] / (1e3 * per_p["fe_mm"].abs())
-    per_p["normalised_error"] = per_p["abs_error_um"] / np.maximum(
-        2.0 * per_p["fe_mm"].abs(), 0.3)
+    per_p["normalised_error"] = normalised_error(per_p["fe_mm"], per_p["space_mm"])
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     per_p.to_csv(out, index=False)
