@@ -82,6 +82,24 @@ def non_negative(text: str) -> float:
     return value
 
 
+def non_negative_int(text: str) -> int:
+    """argparse type: an integer >= 0 (seeds)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
+    return value
+
+
+def interval_text(iv: dict) -> str:
+    """``[lo, hi]`` of an interval dict, ``<=`` / ``>=`` marking ends at the space's edge."""
+    lo = ("<=" if iv["lower_open"] else "") + f"{iv['lower']:.3g}"
+    hi = (">=" if iv["upper_open"] else "") + f"{iv['upper']:.3g}"
+    return f"[{lo}, {hi}]"
+
+
 def unit_interval(text: str) -> float:
     value = _number(text)
     if not 0 <= value <= 1:
@@ -209,13 +227,18 @@ def _identify_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--repeats", type=positive_int, default=100,
                    help="independent window focusing runs; the estimate is their median "
                         "(default 100, as in the paper)")
-    p.add_argument("--seed", type=int, default=0,
-                   help="random seed; the same seed gives the same result (default 0)")
+    p.add_argument("--seed", type=non_negative_int, default=0,
+                   help="random seed, >= 0; the same seed gives the same result (default 0)")
     p.add_argument("--curve", metavar="ID",
                    help="replicate id (column 'curve') when the file holds several curves "
                         "of a probe")
     p.add_argument("--bottom", choices=("fixed", "axial", "free"), default="fixed",
                    help="bottom condition of the space to use (default fixed)")
+    p.add_argument("--noise-um", type=positive, default=None, metavar="UM",
+                   help="noise sd of one measured deflection in µm, for the intervals "
+                        "(default: estimated from replicates, else from the curve)")
+    p.add_argument("--level", type=unit_interval, default=0.95,
+                   help="confidence level of the profile-likelihood intervals (default 0.95)")
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder: identification.json and fit.png / fit.pdf "
                         "(measured vs fitted curves, residuals)")
@@ -227,7 +250,7 @@ def _run_identify(args: argparse.Namespace) -> int:
     result = identify_measured(
         args.measured, args.space, objective=args.objective, probe_mm=args.probe,
         alpha=args.alpha, repeats=args.repeats, seed=args.seed, bottom=args.bottom,
-        curve=args.curve,
+        curve=args.curve, noise_um=args.noise_um, level=args.level,
     )
     try:
         paths = write_identification(result, args.out)
@@ -241,6 +264,11 @@ def _run_identify(args: argparse.Namespace) -> int:
           f"{result['settings']['repeats']} repeats; interquartile range / median "
           f"{100 * spread['x1d_relative_iqr']:.2g} % and {100 * spread['x1h_relative_iqr']:.2g} %), "
           f"E = {e_txt}, median {result['iterations']['median']:g} iterations")
+    if result["intervals"]:
+        iv = result["intervals"]
+        print(f"{100 * iv['level']:g} % intervals (profile likelihood, noise "
+              f"{result['noise']['sd_um']:.2g} µm, {result['noise']['method']}): "
+              f"X1d {interval_text(iv['X1d'])} MPa, X1h {interval_text(iv['X1h'])} MPa")
     for w in result["warnings"]:
         print(f"warning: {w}", file=sys.stderr)
     print(f"wrote {paths['json']}, {paths['png']}, {paths['pdf']}")

@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from skinsuction.cli import _number, non_negative, positive, positive_int
+from skinsuction.cli import _number, non_negative, non_negative_int, positive, positive_int
 
 from ._diagnose import DEFAULT_SPACE_DIR, Settings
 
@@ -65,8 +65,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                                       f"quadrature to the noise (default {d.model_error_um:g})")
     p.add_argument("--repeats", type=positive_int, default=d.repeats,
                    help=f"window focusing runs per fit (default {d.repeats})")
-    p.add_argument("--seed", type=int, default=d.seed,
-                   help="random seed; the same seed gives the same report (default 0)")
+    p.add_argument("--seed", type=non_negative_int, default=d.seed,
+                   help="random seed, >= 0; the same seed gives the same report (default 0)")
+    p.add_argument("--level", type=_level, default=d.level,
+                   help="confidence level of the profile-likelihood intervals of every fit "
+                        f"(default {d.level:g})")
     p.add_argument("--no-holdout", action="store_true",
                    help="skip the cross-probe holdout (faster)")
 
@@ -81,7 +84,8 @@ def command(args: argparse.Namespace) -> int:
 
     settings = Settings(alpha=args.alpha, delta_bic=args.delta_bic, noise_um=args.noise_um,
                         model_error_um=args.model_error_um, repeats=args.repeats,
-                        seed=args.seed, holdout=not args.no_holdout)
+                        seed=args.seed, holdout=not args.no_holdout,
+                        level=args.level)
     try:
         report = diagnose_file(args.measured, args.space_dir, settings)
     except (SpaceMissingError, SpaceFileError) as err:

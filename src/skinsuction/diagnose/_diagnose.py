@@ -46,7 +46,7 @@ from skinsuction.identify import IdentificationError
 from skinsuction.identify.measured_fit import InputError
 
 from ._causes import BASELINE, NONE
-from ._fit import PAPER_WF, FitData, fit_bounds, fit_model
+from ._fit import PAPER_WF, FitData, fit_bounds, fit_intervals, fit_model
 from ._stats import (
     NoiseEstimate,
     bic,
@@ -91,6 +91,11 @@ class Settings:
         Eligible candidates whose BIC is within this of the chosen one's are reported
         as ``ambiguous_with`` (6: the "strong evidence" step of Kass and Raftery).
     seed : int
+        Seed of the window focusing runs (>= 0).
+    level : float
+        Confidence level of the profile-likelihood intervals of every fit.
+    intervals : bool
+        Compute the intervals of the candidates too (the baseline's always).
     window_focusing : dict
         N, Nb, C, max_iter.
     """
@@ -104,6 +109,8 @@ class Settings:
     holdout: bool = True
     ambiguity_bic: float = 6.0
     seed: int = 0
+    level: float = 0.95
+    intervals: bool = True
     window_focusing: dict = field(default_factory=lambda: dict(PAPER_WF))
 
     def __post_init__(self):
@@ -115,6 +122,10 @@ class Settings:
             raise ValueError(f"noise_um must be positive, got {self.noise_um}")
         if self.model_error_um < 0:
             raise ValueError("model_error_um must be >= 0")
+        if int(self.seed) < 0:
+            raise ValueError(f"seed must be >= 0, got {self.seed}")
+        if not 0.5 <= self.level < 1:
+            raise ValueError(f"level must lie in [0.5, 1), got {self.level}")
 
     @classmethod
     def from_config(cls, decision: dict | None = None, fit: dict | None = None, **kw):
@@ -186,6 +197,15 @@ def _beyond_message(space, fd) -> str:
             f"searched, and the FE rays stop before the load p/X1d the fit needs: see "
             f"results/tables/scale_free_coverage.csv); widen scale_free_space.load.max, "
             f"scale_free_space.mesh_fallback or scale_free_space.x1d_mpa")
+
+
+def _intervals(space, fd, theta, noise, settings):
+    """The fit's profile-likelihood intervals as JSON (None, with the reason, if they fail)."""
+    try:
+        return fit_intervals(space, fd, theta, noise_dof=noise.dof,
+                             level=settings.level).to_dict()
+    except ValueError as err:
+        return {"error": str(err)}
 
 
 def _residual_dict(fit, data):
@@ -279,6 +299,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
                             settings.alpha)
     base_bic = bic(base.chi2, base.n_params, n_points)
     base_bounds = fit_bounds(base_space, fd, base.theta)
+    base_ci = _intervals(base_space, fd, base.theta, noise, settings)
     two_probes = len(probes) >= 2 and settings.holdout
     base_hold, base_hold_detail = (_holdout(base_space, fd, settings, next(seeds))
                                    if two_probes else (None, None))
@@ -302,6 +323,8 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         fits[name], tests[name] = f, t
         bounds = fit_bounds(space, fd, f.theta)
         candidates.append({
+            "intervals": (_intervals(space, fd, f.theta, noise, settings)
+                          if settings.intervals else None),
             "cause": name,
             "hypothesis": cause.hypothesis,
             "parameters": f.parameters,
@@ -378,6 +401,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
             "holdout_E_um": base_hold,
             "holdout": base_hold_detail,
             "at_bound": base_bounds,
+            "intervals": base_ci,
             **{k: v for k, v in _fit_json(base, base_test).items() if k != "parameters"},
         },
         "data": {f"{p:g}": {"pressure_mbar": fd[p].pressure_mbar.tolist(),
@@ -388,7 +412,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         "verdict": verdict,
         "beyond_space": beyond,
         "extended": ({"cause": best["cause"], "parameters": best["parameters"],
-                      "E_um": best["E_um"]} if best else None),
+                      "intervals": best["intervals"], "E_um": best["E_um"]} if best else None),
         "gain": ({"E_ratio": best["E_ratio"], "delta_bic": best["delta_bic"],
                   "holdout_ratio": best["holdout_ratio"]} if best else None),
         "runner_up": ({"cause": runner_up["cause"],

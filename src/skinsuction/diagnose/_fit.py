@@ -19,11 +19,17 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from skinsuction.identify import IdentificationError, bound_flags, window_focusing
+from skinsuction.identify import (
+    IdentificationError,
+    bound_flags,
+    profile_intervals,
+    window_focusing,
+)
 
 from ._rays import RayInterpolant, RaySpace
 
-__all__ = ["FitData", "Fit", "ModelCurves", "fit_model", "fit_bounds", "PAPER_WF"]
+__all__ = ["FitData", "Fit", "ModelCurves", "fit_model", "fit_bounds", "fit_intervals",
+           "PAPER_WF"]
 
 #: Window focusing settings of the paper (section 2.4); C in units of sqrt(chi^2/n).
 PAPER_WF = {"n_samples": 1000, "n_best": 20, "tolerance": 1e-6, "max_iter": 200}
@@ -228,3 +234,37 @@ def fit_bounds(space: RaySpace, data: dict, theta) -> dict:
         end = cause.nodes[0] if f["side"] == "lower" else cause.nodes[-1]
         f["neutral"] = bool(f["edge"] == "window" and end == cause.neutral)
     return {f["parameter"]: f for f in flags}
+
+
+def fit_intervals(space: RaySpace, data: dict, theta, *, noise_dof: float = math.inf,
+                  level: float = 0.95):
+    """Profile-likelihood intervals of the fitted parameters (X1d, X1h and the cause's).
+
+    See :func:`skinsuction.identify.profile_intervals`: chi2 with each probe's
+    noise sd, evaluated on a grid of (log10 X1d, log10 X1h/X1d, cause axis)
+    around ``theta``.  A cause parameter whose interval reaches its neutral end
+    (X2d = 0, lambda0 = 1) is consistent with the baseline there: that end is
+    not open.
+    """
+    model = ModelCurves(space, data)
+    cause = space.cause
+
+    def residuals(t):
+        curves = model(t)
+        return np.concatenate([(model.data[p].deflection_mm[None, :] - c)
+                               * (1e3 / model.data[p].sigma_um) for p, c in curves.items()],
+                              axis=1)
+
+    params = {"X1d": lambda t: 10.0 ** t[:, 0], "X1h": lambda t: 10.0 ** (t[:, 0] + t[:, 1])}
+    if cause is not None:
+        params[cause.symbol] = lambda t: np.asarray(
+            cause.value(cause.from_axis(t[:, 2]), 10.0 ** t[:, 0]), dtype=float)
+    ci = profile_intervals(residuals, theta, model.lower, model.upper, params, level=level,
+                           noise_dof=noise_dof)
+    if cause is not None and cause.neutral == cause.lower:
+        iv = ci.parameters[cause.symbol]
+        if iv.lower_open and iv.lower <= cause.value(cause.neutral, 1.0) + 1e-12:
+            from dataclasses import replace
+
+            ci.parameters[cause.symbol] = replace(iv, lower_open=False)
+    return ci

@@ -37,6 +37,21 @@ def _params(p):
     return ", ".join(f"{k} = {v:.4g}" for k, v in p.items())
 
 
+def _interval_rows(model: str, ci) -> list:
+    if not ci:
+        return []
+    if "error" in ci:
+        return [f"| {model} | (no intervals: {ci['error']}) | | |"]
+    out = []
+    for name, iv in ci.items():
+        if not isinstance(iv, dict) or "lower" not in iv:
+            continue
+        lo = ("≤ " if iv["lower_open"] else "") + f"{iv['lower']:.4g}"
+        hi = ("≥ " if iv["upper_open"] else "") + f"{iv['upper']:.4g}"
+        out.append(f"| {model} | {name} | {iv['estimate']:.4g} | [{lo}, {hi}] |")
+    return out
+
+
 def report_markdown(report: dict, figures=None) -> str:
     """The report as Markdown."""
     b = report["baseline"]
@@ -94,6 +109,16 @@ def report_markdown(report: dict, figures=None) -> str:
         f"{report['settings']['ambiguity_bic']:g} of it are reported as a tie.",
         "",
     ]
+    rows = _interval_rows("neo_hookean", b.get("intervals"))
+    for c in sorted(report["candidates"], key=lambda c: c["bic"]):
+        rows += _interval_rows(c["cause"], c.get("intervals"))
+    if rows:
+        level = (b.get("intervals") or {}).get("level", 0.95)
+        lines += [f"## {100 * level:g} % intervals (profile likelihood)", "",
+                  "| model | parameter | estimate | interval |", "|---|---|---|---|", *rows, "",
+                  "≤ / ≥: the interval reaches the edge of the simulated space on that side "
+                  "(the data do not bound the parameter there). Units: MPa (moduli), mm "
+                  "(t_d), 1 (lambda0).", ""]
     if figures:
         lines += ["## Figures", ""]
         for name, path in figures.items():

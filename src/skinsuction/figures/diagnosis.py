@@ -9,9 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinsuction.figures import _style
-
-#: Colour per probe diameter (mm, as text), as in figures.fit.
-PROBE_COLOR = {"6": "#1b6ca8", "2": "#d1495b"}
+from skinsuction.figures.fit import PROBE_COLOR, interval_lines
 #: Line style of the models.
 MODEL_STYLE = {"baseline": {"linestyle": "--", "color": "0.35"},
                "extended": {"linestyle": "-", "color": "#2e933c"}}
@@ -36,8 +34,12 @@ def _chosen(report):
     return next(c for c in report["candidates"] if c["cause"] == report["cause"])
 
 
+#: Units of the fitted parameters.
+UNIT = {"X1d": "MPa", "X1h": "MPa", "X2d": "MPa", "t_d": "mm"}
+
+
 def _params_label(params):
-    unit = {"X1d": "MPa", "X1h": "MPa", "X2d": "MPa", "t_d": "mm"}
+    unit = UNIT
     sym = {"X1d": "$X_1^d$", "X1h": "$X_1^h$", "X2d": "$X_2^d$", "t_d": "$t_d$",
            "lambda0": r"$\lambda_0$"}
     return ", ".join(f"{sym.get(k, k)} = {v:.3g}{' ' + unit[k] if k in unit else ''}"
@@ -70,6 +72,12 @@ def plot_fit(report: dict, title: str | None = None):
             ax.set_xlabel("suction pressure p (mbar)")
             ax.set_ylabel("apex deflection M (mm)")
             ax.legend(loc="upper left", frameon=False)
+        fit_ci = (chosen or {}).get("intervals") or report["baseline"].get("intervals")
+        if fit_ci and "error" not in fit_ci:
+            names = [k for k in fit_ci if k in UNIT or k == "lambda0"]
+            axes[0][-1].text(0.98, 0.04, interval_lines(fit_ci, names, {**UNIT, "lambda0": ""}),
+                             transform=axes[0][-1].transAxes, ha="right", va="bottom",
+                             fontsize=6.5)
         fig.suptitle(title or f"cause: {report['cause']}", fontsize=9)
         fig.tight_layout()
     return fig

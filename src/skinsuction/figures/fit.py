@@ -27,6 +27,20 @@ def _arr(values):
     return np.array([np.nan if v is None else v for v in values], dtype=float)
 
 
+def interval_lines(intervals: dict, names, units=None) -> str:
+    """Text lines ``X1d in [lo, hi] MPa`` of profile-likelihood intervals (figure text)."""
+    units = units or {}
+    lines = [f"{100 * intervals['level']:g} % intervals (profile likelihood)"]
+    for name in names:
+        iv = intervals.get(name)
+        if not iv:
+            continue
+        lo = ("≤" if iv["lower_open"] else "") + f"{iv['lower']:.3g}"
+        hi = ("≥" if iv["upper_open"] else "") + f"{iv['upper']:.3g}"
+        lines.append(f"{name} ∈ [{lo}, {hi}] {units.get(name, 'MPa')}".rstrip())
+    return "\n".join(lines)
+
+
 def plot_fit(result: dict):
     """Figure of :func:`skinsuction.identify.measured_fit.identify_measured`'s result.
 
@@ -66,5 +80,9 @@ def plot_fit(result: dict):
             f"{result['input']['path']}: {objective}\n"
             f"$X_1^d$ = {est['x1d_mpa']:.4g} MPa, $X_1^h$ = {est['x1h_mpa']:.3g} MPa, "
             f"E = {e_txt}", fontsize=8)
+        iv = result.get("intervals")
+        if iv:
+            top.text(0.98, 0.04, interval_lines(iv, ("X1d", "X1h")), transform=top.transAxes,
+                     ha="right", va="bottom", fontsize=7)
         fig.tight_layout()
     return fig

@@ -19,6 +19,7 @@ Examples
 
 from ._bounds import BOUND_FRACTION, bound_flags
 from ._polish import polish
+from ._intervals import Interval, LikelihoodIntervals, interval_threshold, profile_intervals
 from ._baselines import BaselineResult, differential_evolution_fit, least_squares_from_random_starts
 from ._interpolate import LagrangeAxis, SpaceInterpolant, evaluate, interpolate_pressure
 from ._objectives import (
@@ -53,6 +54,10 @@ __all__ = [
     "GriddedSpace",
     "bound_flags",
     "polish",
+    "Interval",
+    "LikelihoodIntervals",
+    "interval_threshold",
+    "profile_intervals",
     "BOUND_FRACTION",
     "LagrangeAxis",
     "SpaceInterpolant",

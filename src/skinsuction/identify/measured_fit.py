@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ._bounds import bound_flags
+from ._intervals import profile_intervals
 from ._polish import polish
 from ._objectives import ratio_objective, single_objective, weighted_objective
 from ._space import GriddedSpace
@@ -184,6 +185,8 @@ def identify_measured(
     curve: str | None = None,
     window_focusing: dict | None = None,
     spaces: dict | None = None,
+    noise_um: float | None = None,
+    level: float = 0.95,
 ) -> dict:
     """Identify (X1d, X1h) of the measured curves in ``measured_path``.
 
@@ -216,13 +219,23 @@ def identify_measured(
     spaces : dict, optional
         ``{probe_mm: GriddedSpace or NeoHookeanSlice}`` instead of ``space_path``
         (tests, notebooks).
+    noise_um : float, optional
+        Noise sd of one measured deflection (µm).  By default it is estimated
+        from replicate curves of the fitted probes, else from differences of the
+        fitted curves (:mod:`skinsuction.noise`).
+    level : float
+        Confidence level of the profile-likelihood intervals
+        (:func:`skinsuction.identify.profile_intervals`).
 
     Returns
     -------
     dict
         JSON-able: ``estimate`` (median over the repeats, MPa), ``best_run``,
         ``spread``, ``E``, ``iterations``, ``settings``, ``input``, ``space``,
-        ``fit`` (curves at the estimate, residuals), ``runs``, ``warnings``.
+        ``fit`` (curves at the estimate, residuals), ``runs``, ``warnings``,
+        ``noise`` and ``intervals`` (95 % profile-likelihood intervals of X1d
+        and X1h, their correlation; None with a warning if the noise cannot be
+        estimated).
     """
     from skinsuction import __version__
     from skinsuction.measured import load_measured
@@ -233,6 +246,12 @@ def identify_measured(
         raise InputError(f"alpha must lie in [0, 1], got {alpha}")
     if int(repeats) < 1:
         raise InputError(f"repeats must be >= 1, got {repeats}")
+    if int(seed) < 0:
+        raise InputError(f"seed must be >= 0, got {seed}")
+    if noise_um is not None and not (math.isfinite(float(noise_um)) and float(noise_um) > 0):
+        raise InputError(f"the noise sd must be a positive number of µm, got {noise_um}")
+    if not 0.5 <= float(level) < 1.0:
+        raise InputError(f"the confidence level must lie in [0.5, 1), got {level}")
     if spaces is None:
         spaces, space_meta, p_range = _read_space(space_path, bottom)
         sp = Path(space_path)
@@ -316,6 +335,9 @@ def identify_measured(
                         f"(interquartile range / median: X1d {100 * rel_iqr[0]:.1f} %, "
                         f"X1h {100 * rel_iqr[1]:.1f} %): the curves do not pin both moduli down")
 
+    noise, intervals = _noise_and_intervals(obj, objective, curves, data, est_theta,
+                                            noise_um, float(level), warnings)
+
     fit = {}
     for p, c in curves.items():
         fitted = single_objective(spaces[p], c).curves(est_theta.reshape(1, 2))[0]
@@ -375,12 +397,84 @@ def identify_measured(
         "iterations": {"median": float(np.median(rep.iterations)),
                        "max": int(rep.iterations.max()),
                        "converged_fraction": float(rep.converged.mean())},
+        "noise": noise,
+        "intervals": intervals,
         "fit": fit,
         "runs": [{"x1d_mpa": float(x[0]), "x1h_mpa": float(x[1]), "E": float(e),
                   "iterations": int(n)}
                  for x, e, n in zip(runs_mpa, rep.E, rep.iterations)],
         "warnings": warnings,
     }
+
+
+def _estimate_noise(curves, data, noise_um):
+    """Noise of the fitted curves: given, from replicates of their probes, or differences."""
+    from skinsuction.noise import NoiseEstimate, noise_from_differences, noise_from_replicates
+
+    if noise_um is not None:
+        return NoiseEstimate(float(noise_um), "given", math.inf, {})
+    groups = []
+    for p in curves:
+        reps = data.for_probe(p)
+        ps = [c.pressure_mbar for c in reps]
+        if len(reps) > 1 and all(q.shape == ps[0].shape and np.allclose(q, ps[0]) for q in ps):
+            groups.append(np.array([c.deflection_mm for c in reps]))
+    if groups:
+        return noise_from_replicates(groups)
+    return noise_from_differences([(c.pressure_mbar[c.pressure_mbar > 0],
+                                    c.deflection_mm[c.pressure_mbar > 0])
+                                   for c in curves.values()])
+
+
+def _likelihood_residuals(obj, objective, curves, sigma_mm):
+    """Residuals / noise sd of the curves the objective fits, vectorised over candidates.
+
+    The likelihood is that of the measured points, whatever the objective: the
+    weighted objective's alpha changes the estimate, not the likelihood.  The
+    ratio's noise follows from the two deflections' (first-order propagation).
+    """
+    if objective == "single":
+        return lambda t: obj.residuals(t) / sigma_mm
+    if objective == "weighted":
+        return lambda t: np.concatenate([obj.objective_2mm.residuals(t),
+                                         obj.objective_6mm.residuals(t)], axis=1) / sigma_mm
+    m2 = np.abs(obj.objective_2mm.measured_mm)
+    m6 = np.abs(obj.objective_6mm.measured_mm)
+    with np.errstate(divide="ignore"):
+        sd = np.abs(obj.gamma) * sigma_mm * np.sqrt(1 / m2 ** 2 + 1 / np.maximum(m6, 1e-12) ** 2)
+    return lambda t: obj.residuals(t) / sd
+
+
+def _noise_and_intervals(obj, objective, curves, data, theta, noise_um, level, warnings):
+    try:
+        noise = _estimate_noise(curves, data, noise_um)
+    except ValueError as err:
+        warnings.append(f"no intervals: the noise cannot be estimated ({err}); "
+                        "give it with --noise-um")
+        return None, None
+    if noise.sd_um <= 0:
+        warnings.append("no intervals: the estimated noise is 0 (are the deflections "
+                        "rounded or synthetic?); give it with --noise-um")
+        return noise.to_dict(), None
+    resid = _likelihood_residuals(obj, objective, curves, 1e-3 * noise.sd_um)
+    params = {"X1d": lambda t: obj.to_moduli(t)[:, 0], "X1h": lambda t: obj.to_moduli(t)[:, 1]}
+    try:
+        ci = profile_intervals(resid, theta, obj.lower, obj.upper, params, level=level,
+                               noise_dof=noise.dof, fit_is_minimum=objective == "single")
+    except ValueError as err:
+        warnings.append(f"no intervals: {err}")
+        return noise.to_dict(), None
+    for name, iv in ci.parameters.items():
+        sides = [s for s, o in (("below", iv.lower_open), ("above", iv.upper_open)) if o]
+        if sides:
+            warnings.append(f"{name} is not bounded {' or '.join(sides)} by the data within the "
+                            f"simulated space: its {100 * level:g} % interval "
+                            f"{iv.text('MPa')} reaches the edge of the space")
+    if ci.scale > 1.5:
+        warnings.append(f"the residuals are {math.sqrt(ci.scale):.2g} times the noise: the "
+                        "intervals are widened for the misfit (see skinsuction diagnose)")
+    warnings.extend(ci.notes)
+    return noise.to_dict(), ci.to_dict()
 
 
 def _bounds_json(obj, scale_free: bool) -> dict:

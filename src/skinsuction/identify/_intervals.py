@@ -1,0 +1,368 @@
+"""Profile-likelihood confidence intervals on the interpolated simulated space.
+
+Method
+------
+With Gaussian noise of sd sigma on every measured deflection,
+``-2 ln L(theta) = chi2(theta) + const`` with ``chi2 = sum (residual / sigma)^2``.
+The profile-likelihood interval of a scalar parameter ``g(theta)`` at level
+``1 - a`` is ``{t : min over g(theta) = t of chi2(theta) - chi2_min <= q}``, with
+``q`` the ``1 - a`` quantile of chi2(1), or of F(1, nu) when sigma was estimated
+with nu degrees of freedom (the t-interval of a linear model).  That set is the
+projection of the region ``{theta : chi2(theta) - chi2_min <= q}`` onto ``g``.
+So one evaluation of chi2 on a dense grid around the optimum gives the interval
+of every parameter at once, and of any function of them (X1h = X1d * X1h/X1d,
+X2d = X1d * X2d/X1d): the interpolated space evaluates thousands of candidates
+in one vectorised call.
+
+Why this method
+    The 6 mm cost valley is a curved banana in (X1d, X1h), X1h of a 2 mm curve
+    is bounded by the edges of the space and not by the data (paper section
+    3.2), and the scale-free axes are logarithms.  A linearised (Gauss-Newton)
+    covariance gives a symmetric, unbounded ellipse: wrong on all three counts.
+    MCMC (e.g. emcee) on the interpolated space gives Bayesian intervals that
+    depend on a prior and need a burn-in and a convergence check per curve; a
+    grid in 2 or 3 dimensions is exhaustive, deterministic and cheaper.
+
+Grid
+    A box centred on the optimum, ``+- 4`` Gauss-Newton standard errors per
+    axis, clipped to the space.  Where the region touches a face of the box that
+    is not an edge of the space, the box grows on that side; where it spans
+    fewer than 8 cells along an axis, the box shrinks around it.  The ends of an
+    interval are refined by linear interpolation of chi2 between each grid
+    point inside the region and its neighbours outside.
+
+Model error
+    When the residuals are larger than the noise explains (the reduced
+    ``chi2_min / (n - d)`` above its 99th percentile under the noise), the
+    threshold is multiplied by ``s = chi2_min / (n - d)`` (the Birge ratio;
+    reported as ``misfit_scale``), so that a systematic misfit widens the
+    interval instead of leaving a noise-only interval around a biased fit.
+
+Open ends
+    An interval that reaches an edge of the simulated space is reported with
+    ``lower_open`` / ``upper_open``: within the space the data do not bound
+    the parameter on that side (its true interval may extend further).
+
+Examples
+--------
+A straight line ``y = a + b x`` with known noise: the profile-likelihood interval
+is the classical ``estimate +- 1.96 se`` exactly.
+
+>>> import numpy as np
+>>> x = np.linspace(0, 1, 20); rng = np.random.default_rng(0)
+>>> y = 1.0 + 2.0 * x + rng.normal(0, 0.1, x.size)
+>>> def residuals(theta):  # (N, 2) -> (N, 20), in units of the noise sd
+...     return (y - theta[:, :1] - theta[:, 1:] * x) / 0.1
+>>> X = np.stack([np.ones_like(x), x], 1)
+>>> fit = np.linalg.lstsq(X, y, rcond=None)[0]
+>>> se = 0.1 * np.sqrt(np.diag(np.linalg.inv(X.T @ X)))
+>>> ci = profile_intervals(residuals, fit, [-10, -10], [10, 10],
+...                        {"a": lambda t: t[:, 0], "b": lambda t: t[:, 1]}, scale_misfit=False)
+>>> b = ci.parameters["b"]
+>>> bool(abs(b.lower - (fit[1] - 1.96 * se[1])) < 0.01 * se[1])
+True
+>>> bool(abs(b.upper - (fit[1] + 1.96 * se[1])) < 0.01 * se[1])
+True
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats
+
+__all__ = ["Interval", "LikelihoodIntervals", "profile_intervals", "interval_threshold"]
+
+#: Grid points per axis, by the number of fitted parameters.
+POINTS_PER_AXIS = {1: 401, 2: 81, 3: 31}
+#: Half-width of the first box, in Gauss-Newton standard errors.
+BOX_HALF_WIDTH_SE = 4.0
+#: Fewest cells the region must span along each axis before the box is shrunk.
+MIN_CELLS = 8
+#: Candidates per vectorised call (bounds the memory of a call).
+CHUNK = 8192
+
+
+@dataclass(frozen=True)
+class Interval:
+    """A confidence interval of one parameter."""
+
+    estimate: float
+    lower: float
+    upper: float
+    lower_open: bool = False  # the region reaches the space's edge on that side
+    upper_open: bool = False
+
+    def to_dict(self) -> dict:
+        return {"estimate": self.estimate, "lower": self.lower, "upper": self.upper,
+                "lower_open": self.lower_open, "upper_open": self.upper_open}
+
+    def text(self, unit: str = "") -> str:
+        """``[lo, hi]`` with ``<=`` / ``>=`` marks at open ends."""
+        lo = ("<=" if self.lower_open else "") + f"{self.lower:.3g}"
+        hi = (">=" if self.upper_open else "") + f"{self.upper:.3g}"
+        return f"[{lo}, {hi}]" + (f" {unit}" if unit else "")
+
+
+@dataclass
+class LikelihoodIntervals:
+    """Profile-likelihood intervals of several parameters of one fit."""
+
+    parameters: dict
+    correlation: dict
+    level: float
+    chi2_min: float
+    threshold: float
+    scale: float
+    noise_dof: float
+    n_points: int
+    grid_points: int
+    method: str = "profile likelihood on a grid of the interpolated simulated space"
+    notes: list = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return {"method": self.method, "level": self.level,
+                **{k: v.to_dict() for k, v in self.parameters.items()},
+                "correlation": self.correlation,
+                "chi2_min": self.chi2_min, "delta_chi2_threshold": self.threshold,
+                "misfit_scale": self.scale,
+                "noise_dof": None if math.isinf(self.noise_dof) else self.noise_dof,
+                "n_points": self.n_points, "grid_points": self.grid_points,
+                "notes": list(self.notes)}
+
+
+def interval_threshold(level: float, noise_dof: float = math.inf) -> float:
+    """The chi2 rise that bounds a ``level`` interval of one parameter.
+
+    The ``level`` quantile of chi2(1) for a known noise level, of F(1, nu) for a
+    noise level estimated with ``nu`` degrees of freedom.
+
+    >>> round(interval_threshold(0.95), 3), round(interval_threshold(0.95, 20), 3)
+    (3.841, 4.351)
+    """
+    if math.isinf(noise_dof):
+        return float(stats.chi2.ppf(level, 1))
+    return float(stats.f.ppf(level, 1, noise_dof))
+
+
+def _misfit_scale(chi2_min, dof, noise_dof, alpha=0.01) -> float:
+    """The Birge ratio chi2_min / dof where it is significantly above 1, else 1.
+
+    Scaling whenever chi2_min > dof would widen the intervals of a correct model
+    half the time (measured: 97 % coverage instead of 95 % with an estimated
+    noise level); only a misfit that the noise does not explain at level
+    ``alpha`` (the reduced chi2 against F(dof, noise_dof)) widens them.
+    """
+    ratio = chi2_min / dof
+    crit = (stats.chi2.ppf(1 - alpha, dof) / dof if math.isinf(noise_dof)
+            else stats.f.ppf(1 - alpha, dof, noise_dof))
+    return float(ratio) if ratio > crit else 1.0
+
+
+def _chi2(residuals, theta):
+    out = np.empty(theta.shape[0])
+    for i in range(0, theta.shape[0], CHUNK):
+        r = np.asarray(residuals(theta[i:i + CHUNK]), dtype=float)
+        c = np.einsum("nt,nt->n", r, r)
+        c[~np.isfinite(c)] = np.inf
+        out[i:i + CHUNK] = c
+    return out
+
+
+def _gauss_newton(residuals, theta, lower, upper):
+    """Covariance of theta (unit noise) from a central-difference Jacobian; None if singular."""
+    d = theta.size
+    h = 1e-4 * np.maximum(upper - lower, 1e-12)
+    pts = []
+    for a in range(d):
+        lo, hi = theta.copy(), theta.copy()
+        lo[a] = max(lower[a], theta[a] - h[a])
+        hi[a] = min(upper[a], theta[a] + h[a])
+        pts += [lo, hi]
+    r = np.asarray(residuals(np.array(pts)), dtype=float)
+    steps = np.array([pts[2 * a + 1][a] - pts[2 * a][a] for a in range(d)])
+    J = (r[1::2] - r[0::2]).T / steps  # (n, d)
+    if not np.all(np.isfinite(J)):
+        return None
+    try:
+        cov = np.linalg.inv(J.T @ J)
+    except np.linalg.LinAlgError:
+        return None
+    return cov if np.all(np.isfinite(cov)) and np.all(np.diag(cov) > 0) else None
+
+
+def _grid(box_lo, box_hi, m):
+    axes = [np.linspace(lo, hi, m) for lo, hi in zip(box_lo, box_hi)]
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return axes, np.stack([g.reshape(-1) for g in mesh], axis=1)
+
+
+def _crossings(pts, chi2, inside, shape, limit):
+    """Points where chi2 crosses ``limit`` between inside grid points and outside neighbours."""
+    d = len(shape)
+    P = pts.reshape(*shape, d)
+    C = chi2.reshape(shape)
+    I = inside.reshape(shape)
+    out = []
+    for a in range(d):
+        for step in (1, -1):
+            i_sl = [slice(None)] * d
+            j_sl = [slice(None)] * d
+            i_sl[a] = slice(0, -1) if step == 1 else slice(1, None)
+            j_sl[a] = slice(1, None) if step == 1 else slice(0, -1)
+            i_sl, j_sl = tuple(i_sl), tuple(j_sl)
+            pair = I[i_sl] & ~I[j_sl]
+            if not pair.any():
+                continue
+            ci, cj = C[i_sl][pair], C[j_sl][pair]
+            pi, pj = P[i_sl][pair], P[j_sl][pair]
+            f = np.where(np.isfinite(cj), (limit - ci) / np.where(cj > ci, cj - ci, 1.0), 0.5)
+            f = np.clip(f, 0.0, 1.0)[:, None]
+            out.append(pi + f * (pj - pi))
+    return np.concatenate(out) if out else np.empty((0, d))
+
+
+def profile_intervals(residuals, theta_hat, lower, upper, parameters: dict, *,
+                      level: float = 0.95, noise_dof: float = math.inf,
+                      scale_misfit: bool = True, fit_is_minimum: bool = True,
+                      points_per_axis: int | None = None,
+                      max_rounds: int = 10) -> LikelihoodIntervals:
+    """Profile-likelihood intervals of ``parameters`` around the fit ``theta_hat``.
+
+    Parameters
+    ----------
+    residuals : callable
+        ``(N, d) -> (N, n)``: the residuals of N candidates divided by the noise
+        sd of each point (so that chi2 is their sum of squares); NaN or inf
+        where a candidate has no curve.
+    theta_hat : array (d,)
+        The fit.
+    lower, upper : array (d,)
+        Bounds of the simulated space in the coordinates of theta.
+    parameters : dict name -> callable ``(N, d) -> (N,)``
+        The reported parameters as functions of theta (e.g. moduli in MPa).
+    level : float
+        Confidence level of each interval (one parameter at a time).
+    noise_dof : float
+        Degrees of freedom of the noise estimate (inf: known).
+    scale_misfit : bool
+        Widen by the Birge ratio when chi2_min exceeds ``n - d``.
+    fit_is_minimum : bool
+        ``theta_hat`` minimises this chi2 (else, e.g. for a weighted or ratio
+        objective, the interval is around the likelihood's own minimum and no
+        note is made when the grid finds a lower chi2).
+
+    Returns
+    -------
+    LikelihoodIntervals
+    """
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    theta = np.clip(np.asarray(theta_hat, dtype=float).reshape(-1), lower, upper)
+    d = theta.size
+    m = int(points_per_axis or POINTS_PER_AXIS.get(d, 15))
+    r0 = np.asarray(residuals(theta[None, :]), dtype=float)[0]
+    n = r0.size
+    chi2_hat = float(np.sum(r0 ** 2)) if np.all(np.isfinite(r0)) else math.inf
+    span = upper - lower
+    cov = _gauss_newton(residuals, theta, lower, upper)
+    se = np.sqrt(np.diag(cov)) if cov is not None else span
+    se = np.where(np.isfinite(se) & (se > 0), np.minimum(se, span), span)
+    box_lo = np.maximum(lower, theta - BOX_HALF_WIDTH_SE * se)
+    box_hi = np.minimum(upper, theta + BOX_HALF_WIDTH_SE * se)
+    tiny = 1e-9 * span
+    notes, shrinks, total = [], 0, 0
+    for _ in range(max_rounds):
+        box_hi = np.maximum(box_hi, box_lo + tiny)
+        axes, pts = _grid(box_lo, box_hi, m)
+        chi2 = _chi2(residuals, pts)
+        total += pts.shape[0]
+        chi2_min = min(chi2_hat, float(chi2.min()))
+        if not math.isfinite(chi2_min):
+            raise ValueError("no candidate of the space near the fit has a curve")
+        dof = max(n - d, 1)
+        scale = _misfit_scale(chi2_min, dof, noise_dof) if scale_misfit else 1.0
+        limit = chi2_min + interval_threshold(level, noise_dof) * scale
+        inside = chi2 <= limit
+        changed = False
+        cells = (box_hi - box_lo) / (m - 1)
+        for a in range(d):
+            on_lo = inside & (pts[:, a] <= box_lo[a] + 0.5 * cells[a])
+            on_hi = inside & (pts[:, a] >= box_hi[a] - 0.5 * cells[a])
+            if on_lo.any() and box_lo[a] > lower[a] + tiny[a]:
+                box_lo[a] = max(lower[a], box_lo[a] - (box_hi[a] - box_lo[a]))
+                changed = True
+            if on_hi.any() and box_hi[a] < upper[a] - tiny[a]:
+                box_hi[a] = min(upper[a], box_hi[a] + (box_hi[a] - box_lo[a]))
+                changed = True
+        if changed:
+            continue
+        if shrinks < 2:
+            inner = pts[inside]
+            ext_lo, ext_hi = inner.min(axis=0), inner.max(axis=0)
+            narrow = (ext_hi - ext_lo) < MIN_CELLS * cells
+            if narrow.any():
+                pad = np.maximum(0.5 * (ext_hi - ext_lo), 2 * cells)
+                box_lo = np.where(narrow, np.maximum(lower, ext_lo - pad), box_lo)
+                box_hi = np.where(narrow, np.minimum(upper, ext_hi + pad), box_hi)
+                shrinks += 1
+                continue
+        break
+    else:
+        notes.append(f"the grid did not settle in {max_rounds} rounds")
+    if fit_is_minimum and chi2_hat > chi2_min + 1e-6 * max(1.0, chi2_min):
+        notes.append(f"the grid found a lower chi2 ({chi2_min:.4g}) than the fit "
+                     f"({chi2_hat:.4g}): the fit is not the minimum")
+    shape = (m,) * d
+    edge = pts[inside]
+    cross = _crossings(pts, chi2, inside, shape, limit)
+    region = np.concatenate([edge, cross]) if cross.size else edge
+    # an end is open where the region meets an edge of the space along an axis the
+    # parameter depends on (X1d of a 2 mm curve is bounded even where the region
+    # meets the ends of the X1h axis)
+    at_edge = (region <= lower + tiny) | (region >= upper - tiny)
+    G = _gradients(parameters, theta, lower, upper)
+    intervals = {}
+    for k, (name, g) in enumerate(parameters.items()):
+        values = np.asarray(g(region), dtype=float)
+        est = float(np.asarray(g(theta[None, :]), dtype=float)[0])
+        axes_of = np.abs(G[k]) > 1e-9 * np.abs(G[k]).max() if np.abs(G[k]).max() > 0 \
+            else np.ones(d, bool)
+        open_pt = at_edge[:, axes_of].any(axis=1)
+        i_lo, i_hi = int(np.nanargmin(values)), int(np.nanargmax(values))
+        intervals[name] = Interval(est, float(values[i_lo]), float(values[i_hi]),
+                                   bool(open_pt[i_lo]), bool(open_pt[i_hi]))
+    return LikelihoodIntervals(intervals, _correlation(cov, G, list(parameters)),
+                               level, chi2_min, limit - chi2_min, scale, noise_dof, n,
+                               total, notes=notes)
+
+
+def _gradients(parameters, theta, lower, upper) -> np.ndarray:
+    """d(parameter)/d(theta) at theta, (n_parameters, d), by finite differences."""
+    d = theta.size
+    h = 1e-6 * np.maximum(upper - lower, 1e-12)
+    G = np.zeros((len(parameters), d))
+    for a in range(d):
+        lo, hi = theta.copy(), theta.copy()
+        lo[a] = max(lower[a], theta[a] - h[a])
+        hi[a] = min(upper[a], theta[a] + h[a])
+        pair = np.stack([lo, hi])
+        for k, g in enumerate(parameters.values()):
+            v = np.asarray(g(pair), dtype=float)
+            G[k, a] = (v[1] - v[0]) / (hi[a] - lo[a])
+    return np.where(np.isfinite(G), G, 0.0)
+
+
+def _correlation(cov, G, names) -> dict:
+    """Local (Gauss-Newton) correlation of every pair of parameters."""
+    if cov is None or len(names) < 2:
+        return {}
+    c = G @ cov @ G.T
+    sd = np.sqrt(np.diag(c))
+    out = {}
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            r = c[i, j] / (sd[i] * sd[j]) if sd[i] > 0 and sd[j] > 0 else math.nan
+            out[f"{names[i]},{names[j]}"] = float(r) if math.isfinite(r) else None
+    return out
