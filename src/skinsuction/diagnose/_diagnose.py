@@ -38,7 +38,6 @@ import datetime as _dt
 import math
 import time
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 
 import numpy as np
 

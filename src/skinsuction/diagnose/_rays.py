@@ -39,8 +39,6 @@ from __future__ import annotations
 
 import logging
 import math
-import re
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -865,7 +863,15 @@ class NeoHookeanSlice:
         self.probe_mm = float(probe_mm)
 
     def interpolant_at(self, pressure_mbar) -> "TabulatedInterpolant":
-        return TabulatedInterpolant(self.space, self.probe_mm, pressure_mbar)
+        # a study measures every subject with the same protocol: tabulate it once
+        p = np.asarray(pressure_mbar, dtype=float)
+        key = p.tobytes()
+        cache = self.__dict__.setdefault("_tables", {})
+        if key not in cache:
+            if len(cache) >= 16:
+                cache.pop(next(iter(cache)))
+            cache[key] = TabulatedInterpolant(self.space, self.probe_mm, p)
+        return cache[key]
 
     @staticmethod
     def to_moduli(theta) -> np.ndarray:

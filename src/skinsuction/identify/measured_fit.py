@@ -237,46 +237,94 @@ def identify_measured(
         and X1h, their correlation; None with a warning if the noise cannot be
         estimated).
     """
-    from skinsuction import __version__
     from skinsuction.measured import load_measured
 
-    if objective not in OBJECTIVE_KINDS:
-        raise InputError(f"objective must be one of {OBJECTIVE_KINDS}, got {objective!r}")
-    if not 0.0 <= float(alpha) <= 1.0:
-        raise InputError(f"alpha must lie in [0, 1], got {alpha}")
-    if int(repeats) < 1:
-        raise InputError(f"repeats must be >= 1, got {repeats}")
-    if int(seed) < 0:
-        raise InputError(f"seed must be >= 0, got {seed}")
-    if noise_um is not None and not (math.isfinite(float(noise_um)) and float(noise_um) > 0):
-        raise InputError(f"the noise sd must be a positive number of µm, got {noise_um}")
-    if not 0.5 <= float(level) < 1.0:
-        raise InputError(f"the confidence level must lie in [0.5, 1), got {level}")
-    if spaces is None:
-        spaces, space_meta, p_range = _read_space(space_path, bottom)
-        sp = Path(space_path)
-        sha_of = sp if sp.is_file() else sp / "neo_hookean.parquet"
-        space_info = {"path": str(space_path), "sha256": file_sha256(sha_of),
-                      "name": space_meta.get("space"),
-                      "git_commit": (space_meta.get("git") or {}).get("commit"),
-                      "mesh": space_meta.get("mesh") or (space_meta.get("ray_spec") or {}).get("mesh")}
-    else:
-        space_info = {"path": None, "sha256": None, "name": "given in memory"}
-        p_range = None
-    probes_needed = [float(probe_mm)] if objective == "single" else [2.0, 6.0]
-    for p in probes_needed:
-        if not any(math.isclose(p, q, abs_tol=1e-6) for q in spaces):
-            have = ", ".join(f"{q:g}" for q in spaces)
-            raise InputError(f"{space_info['path']}: the simulated space has no {p:g} mm probe "
-                             f"(probes: {have} mm)")
-    all_probes = list(spaces)
-    spaces = {p: spaces[next(q for q in spaces if math.isclose(p, q, abs_tol=1e-6))]
-              for p in probes_needed}
-    if p_range is None:
-        p_range = _pressure_range(spaces.values())
-    data = load_measured(measured_path, available_probes=all_probes,
-                         pressure_range_mbar=p_range,
-                         range_note=_range_note(spaces.values()))
+    _check_settings(alpha, repeats, seed, noise_um, level)
+    space = load_space(space_path, bottom) if spaces is None else LoadedSpace.given(spaces)
+    probes_needed = space.check_probes(objective, probe_mm)
+    data = load_measured(measured_path, available_probes=list(space.spaces),
+                         pressure_range_mbar=space.pressure_range(probes_needed),
+                         range_note=space.range_note(probes_needed))
+    result = identify_data(data, space, objective=objective, probe_mm=probe_mm, alpha=alpha,
+                           repeats=repeats, seed=seed, curve=curve,
+                           window_focusing=window_focusing, noise_um=noise_um, level=level)
+    result["input"]["sha256"] = file_sha256(measured_path)
+    return result
+
+
+class LoadedSpace:
+    """A simulated space read once for many identifications (a study).
+
+    ``spaces`` maps probe (mm) to a :class:`GriddedSpace` or a scale-free
+    ``NeoHookeanSlice``; ``info`` describes the file for the outputs.
+    """
+
+    def __init__(self, spaces: dict, info: dict, p_range=None, bottom: str = "fixed"):
+        self.spaces, self.info, self._p_range, self.bottom = spaces, info, p_range, bottom
+
+    @classmethod
+    def given(cls, spaces: dict, bottom: str = "fixed") -> "LoadedSpace":
+        return cls(spaces, {"path": None, "sha256": None, "name": "given in memory"},
+                   None, bottom)
+
+    def probe(self, p: float):
+        """The space of probe ``p`` (to 1e-6 mm); InputError naming the probes if absent."""
+        for q, s in self.spaces.items():
+            if math.isclose(float(p), float(q), abs_tol=1e-6):
+                return s
+        have = ", ".join(f"{q:g}" for q in self.spaces)
+        raise InputError(f"{self.info['path']}: the simulated space has no {float(p):g} mm "
+                         f"probe (probes: {have} mm)")
+
+    def check_probes(self, objective: str, probe_mm: float) -> list:
+        """Probes an objective needs, checked against the space."""
+        if objective not in OBJECTIVE_KINDS:
+            raise InputError(f"objective must be one of {OBJECTIVE_KINDS}, got {objective!r}")
+        needed = [float(probe_mm)] if objective == "single" else [2.0, 6.0]
+        for p in needed:
+            self.probe(p)
+        return needed
+
+    def pressure_range(self, probes) -> tuple:
+        if self._p_range is not None:
+            return self._p_range
+        return _pressure_range([self.probe(p) for p in probes])
+
+    def range_note(self, probes) -> str:
+        return _range_note([self.probe(p) for p in probes])
+
+
+def load_space(space_path=DEFAULT_SPACE, bottom: str = "fixed") -> LoadedSpace:
+    """Read a simulated space (scale-free folder or file, or a grid database) once."""
+    spaces, space_meta, p_range = _read_space(space_path, bottom)
+    sp = Path(space_path)
+    sha_of = sp if sp.is_file() else sp / "neo_hookean.parquet"
+    info = {"path": str(space_path), "sha256": file_sha256(sha_of),
+            "name": space_meta.get("space"),
+            "git_commit": (space_meta.get("git") or {}).get("commit"),
+            "mesh": space_meta.get("mesh") or (space_meta.get("ray_spec") or {}).get("mesh")}
+    return LoadedSpace(spaces, info, p_range, bottom)
+
+
+def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_mm: float = 6.0,
+                  alpha: float = 0.5, repeats: int = 100, seed: int = 0,
+                  curve: str | None = None, window_focusing: dict | None = None,
+                  noise_um: float | None = None, level: float = 0.95) -> dict:
+    """Identify (X1d, X1h) of loaded curves (:class:`skinsuction.measured.MeasuredData`).
+
+    The work of :func:`identify_measured` once the file and the space are read
+    (parameters and result as there; ``input.sha256`` is left None).
+    """
+    from skinsuction import __version__
+
+    _check_settings(alpha, repeats, seed, noise_um, level)
+    probes_needed = space.check_probes(objective, probe_mm)
+    spaces = {p: space.probe(p) for p in probes_needed}
+    space_info = space.info
+    bottom = space.bottom
+    measured_path = data.path
+    for c in data.curves:
+        space.probe(c.probe_mm)  # every curve must have a space (the loader checks a file)
     curves = {p: _pick_curve(data, p, curve, measured_path) for p in probes_needed}
 
     if objective == "single":
@@ -354,7 +402,7 @@ def identify_measured(
         "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "input": {
             "path": str(measured_path),
-            "sha256": file_sha256(measured_path),
+            "sha256": None,
             "metadata": dict(data.metadata),
             "curves": {f"{p:g}": {"curve": c.curve, "first_line": c.first_line, "points": len(c)}
                        for p, c in curves.items()},
@@ -405,6 +453,19 @@ def identify_measured(
                  for x, e, n in zip(runs_mpa, rep.E, rep.iterations)],
         "warnings": warnings,
     }
+
+
+def _check_settings(alpha, repeats, seed, noise_um, level):
+    if not 0.0 <= float(alpha) <= 1.0:
+        raise InputError(f"alpha must lie in [0, 1], got {alpha}")
+    if int(repeats) < 1:
+        raise InputError(f"repeats must be >= 1, got {repeats}")
+    if int(seed) < 0:
+        raise InputError(f"seed must be >= 0, got {seed}")
+    if noise_um is not None and not (math.isfinite(float(noise_um)) and float(noise_um) > 0):
+        raise InputError(f"the noise sd must be a positive number of µm, got {noise_um}")
+    if not 0.5 <= float(level) < 1.0:
+        raise InputError(f"the confidence level must lie in [0.5, 1), got {level}")
 
 
 def _estimate_noise(curves, data, noise_um):
