@@ -1,5 +1,5 @@
 """The ``skinsuction`` command: ``simulate`` a suction test, ``identify`` moduli,
-``diagnose`` the misfit of the neo-Hookean model.
+``diagnose`` the misfit of the neo-Hookean model, run a whole ``study``.
 
 ::
 
@@ -8,6 +8,7 @@
         --objective single|weighted|ratio [--probe 6] [--alpha 0.5] [--repeats 100] \\
         [--seed 0] --out DIR
     skinsuction diagnose MEASURED.csv --out DIR
+    skinsuction study FOLDER_OR_LONG.csv --out DIR [--no-diagnose] [--workers 2]
 
 Each subcommand is a :class:`Command` in :data:`COMMANDS`: a function that adds
 its arguments to an ``argparse`` parser and a function that runs it and returns
@@ -288,6 +289,56 @@ def _run_diagnose(args: argparse.Namespace) -> int:
     return command(args)
 
 
+# ------------------------------------------------------------------ study
+def _study_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("path", metavar="PATH",
+                   help="a folder of measured CSVs (ids from '# key: value' lines and an "
+                        "optional manifest.csv/.yaml) or one long CSV whose extra columns "
+                        "(subject, site, visit, group, ...) are ids")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder: curves.parquet, comparison.csv, summary.md, "
+                        "study.json and figures")
+    p.add_argument("--space", default="results/simulated_space/scale_free", metavar="DIR",
+                   help="the scale-free simulated space (default "
+                        "results/simulated_space/scale_free)")
+    p.add_argument("--no-diagnose", action="store_true",
+                   help="identify only (much faster: no diagnosis of each curve)")
+    p.add_argument("--repeats", type=positive_int, default=2,
+                   help="window focusing runs per identification, polished (default 2)")
+    p.add_argument("--seed", type=non_negative_int, default=0,
+                   help="seed of the study; measurement i uses seed + i (default 0)")
+    p.add_argument("--level", type=unit_interval, default=0.95,
+                   help="confidence level of the intervals (default 0.95)")
+    p.add_argument("--workers", type=positive_int, default=1,
+                   help="processes (default 1)")
+    p.add_argument("--reports", action="store_true",
+                   help="also write each measurement's identification and diagnosis files "
+                        "(off by default: thousands of folders for big studies)")
+
+
+def _run_study(args: argparse.Namespace) -> int:
+    from skinsuction.cohort import run_study
+
+    try:
+        r = run_study(args.path, args.out, space_dir=args.space, diagnose=not args.no_diagnose,
+                      repeats=args.repeats, seed=args.seed, level=args.level,
+                      workers=args.workers, reports=args.reports)
+    except FileNotFoundError as err:
+        raise CLIError(str(err)) from None
+    print(f"{r['measurements']} measurements, {r['errors']} with an error, "
+          f"{r['seconds']:.1f} s")
+    for c in r["comparison"]:
+        if c.get("p_value") is None:
+            continue
+        print(f"{c['group']} ({c.get('comparison', '')}): median change "
+              f"{c['median_change_percent']:+.1f} % "
+              + (f"[{c['ci_low_percent']:+.1f}, {c['ci_high_percent']:+.1f}] "
+                 if c.get("ci_low_percent") is not None else "")
+              + f"p = {c['p_value']:.2g}, {c['test']}")
+    print(f"wrote {', '.join(r['paths'].values())}")
+    return EXIT_OK
+
+
 # ------------------------------------------------------------------ registry
 COMMANDS = {
     c.name: c
@@ -328,6 +379,18 @@ COMMANDS = {
             "DIR/report.md and figures.",
             _diagnose_arguments,
             _run_diagnose,
+        ),
+        Command(
+            "study",
+            "identify and diagnose every curve of a clinical study, compare the groups",
+            "Identify (X1d, X1h with 95 % profile-likelihood intervals) and diagnose every "
+            "measurement of a study: a folder of measured CSVs or one long CSV with id "
+            "columns (subject, site, visit, group, ...). A bad file becomes a row with its "
+            "error. Writes DIR/curves.parquet (one row per measurement), DIR/comparison.csv "
+            "and DIR/summary.md (paired Wilcoxon within groups, Mann-Whitney between "
+            "groups), DIR/study.json and figures.",
+            _study_arguments,
+            _run_study,
         ),
     )
 }

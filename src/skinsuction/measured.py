@@ -84,6 +84,8 @@ __all__ = [
     "load_measured",
     "REQUIRED_COLUMNS",
     "OPTIONAL_COLUMNS",
+    "StudyEntry",
+    "load_table",
 ]
 
 REQUIRED_COLUMNS = ("probe_mm", "pressure_mbar", "deflection_mm")
@@ -234,7 +236,7 @@ def _split(line: str) -> list[str]:
     return [f.strip().strip('"').strip() for f in line.split(",")]
 
 
-def _header(path, lineno: int, text: str) -> list[str]:
+def _header(path, lineno: int, text: str, extra_columns: bool = False) -> list[str]:
     names = _split(text)
     if len(names) == 1:
         for sep, label in ((";", "';'"), ("\t", "tabs")):
@@ -248,7 +250,10 @@ def _header(path, lineno: int, text: str) -> list[str]:
         if name in seen:
             raise MeasuredDataError(path, lineno, name, "column appears twice in the header")
         seen.add(name)
-        if name not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS:
+        if name == "":
+            raise MeasuredDataError(path, lineno, None, "a column of the header has no name")
+        if name not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS and not (
+                extra_columns and name.lower() not in _UNIT_HINTS):
             hint = _UNIT_HINTS.get(name.lower())
             if hint is None:
                 hint = (
@@ -286,9 +291,16 @@ class _Rows:
     deflection: list = field(default_factory=list)
 
 
-def _parse(path, text: str):
+def _lines(text: str):
+    """The lines of a text: LF, CRLF or CR-only (old Mac) line ends."""
+    return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+
+
+def _parse(path, text: str, line_numbers=None):
     comments, metadata, header, groups = [], {}, None, {}
-    for lineno, line in enumerate(text.split("\n"), start=1):
+    lines = _lines(text)
+    numbers = range(1, len(lines) + 1) if line_numbers is None else line_numbers
+    for lineno, line in zip(numbers, lines):
         line = line.rstrip("\r")
         stripped = line.strip()
         if not stripped:
@@ -324,14 +336,14 @@ def _parse(path, text: str):
         rows.lines.append(lineno)
         rows.pressure.append(values["pressure_mbar"])
         rows.deflection.append(values["deflection_mm"])
+    last = numbers[-1] if len(numbers) else 1
     if header is None:
-        n_lines = text.count("\n") + 1
         raise MeasuredDataError(
-            path, n_lines, None,
+            path, last, None,
             "no header line (expected " + ",".join(REQUIRED_COLUMNS) + ")",
         )
     if not groups:
-        raise MeasuredDataError(path, text.count("\n") + 1, None, "no data rows after the header")
+        raise MeasuredDataError(path, last, None, "no data rows after the header")
     return header, groups, comments, metadata
 
 
@@ -453,8 +465,14 @@ def load_measured(
     MeasuredDataError
         For any problem of the file, with file, line and column in the message.
     """
-    text = _read_text(path)
-    _, groups, comments, metadata = _parse(path, text)
+    return _load_text(path, _read_text(path), None, available_probes, pressure_range_mbar,
+                      range_note)
+
+
+def _load_text(path, text, line_numbers, available_probes=None, pressure_range_mbar=None,
+               range_note=None, metadata=None) -> MeasuredData:
+    _, groups, comments, file_metadata = _parse(path, text, line_numbers)
+    metadata = {**file_metadata, **(metadata or {})}
     for rows in groups.values():
         _check_curve(path, rows)
     for rows in groups.values():
@@ -470,3 +488,125 @@ def load_measured(
         for rows in groups.values()
     )
     return MeasuredData(str(path), curves, metadata, tuple(comments))
+
+
+@dataclass(frozen=True, eq=False)
+class StudyEntry:
+    """One measurement of a study: its ids and its curves, or the error that stopped it.
+
+    Attributes
+    ----------
+    ids : dict
+        Id columns of a long CSV, ``# key: value`` lines and manifest entries.
+    data : MeasuredData or None
+    error : str or None
+        The one-line message of a rejected measurement (file, line, column).
+    source : str
+        The file it comes from.
+    """
+
+    ids: dict
+    data: MeasuredData | None
+    error: str | None
+    source: str
+
+
+def load_table(path, *, ids=None, available_probes=None, pressure_range_mbar=None,
+               range_note=None) -> list:
+    """Read a measured CSV whose extra columns are ids: one :class:`StudyEntry` per id value.
+
+    Columns other than ``probe_mm``, ``pressure_mbar``, ``deflection_mm`` and
+    ``curve`` (e.g. ``subject``, ``site``, ``visit``, ``group``) are ids: the
+    rows with the same ids form one measurement, checked by the rules of
+    :func:`load_measured` with the file's own line numbers.  A file without id
+    columns is one measurement.  A bad row stops only its measurement (or, if
+    its ids cannot be read, becomes an entry of its own): a study goes on.
+
+    Parameters
+    ----------
+    ids : dict, optional
+        Ids of the whole file (e.g. from a manifest); its id columns and
+        ``# key: value`` lines add to them.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "study.csv"
+    >>> _ = path.write_text("subject,visit,probe_mm,pressure_mbar,deflection_mm\\n"
+    ...                     "S1,1,6,0,0\\nS1,1,6,100,0.7\\nS2,1,6,0,0\\nS2,1,6,100,0,8\\n")
+    >>> [(e.ids["subject"], e.error is None) for e in load_table(path)]
+    [('S1', True), ('S2', False)]
+    >>> print(load_table(path)[1].error)  # doctest: +ELLIPSIS
+    /...study.csv, line 5: found 6 fields, expected 5 (...) (a decimal comma? use '.')
+    """
+    try:
+        text = _read_text(path)
+    except MeasuredDataError as err:
+        return [StudyEntry(dict(ids or {}), None, str(err), str(path))]
+    lines = _lines(text)
+    header, comments = None, []
+    for lineno, line in enumerate(lines, start=1):
+        stripped = line.strip()
+        if stripped.startswith("#"):
+            comments.append((lineno, line))
+        elif stripped:
+            header = (lineno, line)
+            break
+    meta = {}
+    for _, c in comments:
+        key, sep, value = c.strip()[1:].strip().partition(":")
+        if sep and key.strip():
+            meta[key.strip()] = value.strip()
+    base_ids = {**meta, **(ids or {})}
+    if header is None:
+        return [StudyEntry(base_ids, None, str(MeasuredDataError(
+            path, len(lines), None, "no header line (expected " + ",".join(REQUIRED_COLUMNS)
+            + ")")), str(path))]
+    try:
+        names = _header(path, header[0], header[1], extra_columns=True)
+    except MeasuredDataError as err:
+        return [StudyEntry(base_ids, None, str(err), str(path))]
+    id_cols = [i for i, n in enumerate(names) if n not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS]
+    kept = [i for i in range(len(names)) if i not in id_cols]
+    sub_header = ",".join(names[i] for i in kept)
+    groups, bad = {}, []
+    for lineno in range(header[0] + 1, len(lines) + 1):
+        line = lines[lineno - 1]
+        stripped = line.strip()
+        if not stripped or stripped.startswith("#"):
+            continue
+        fields = _split(line)
+        if len(fields) != len(names):
+            hint = " (a decimal comma? use '.')" if len(fields) > len(names) else ""
+            key = tuple(fields[i] for i in id_cols) if len(fields) > max(id_cols, default=-1) \
+                else None
+            bad.append((key, MeasuredDataError(
+                path, lineno, None, f"found {len(fields)} fields, expected {len(names)} "
+                f"({', '.join(names)}){hint}")))
+            continue
+        key = tuple(fields[i] for i in id_cols)
+        groups.setdefault(key, []).append((lineno, ",".join(fields[i] for i in kept)))
+    entries, errors = [], dict()
+    for key, err in bad:
+        errors.setdefault(key, err)  # the first bad row of a measurement names it
+    keys = list(dict.fromkeys([*groups, *errors]))
+    for key in keys:
+        entry_ids = {**base_ids, **({names[i]: v for i, v in zip(id_cols, key)}
+                                    if key is not None else {})}
+        if key in errors:
+            entries.append(StudyEntry(entry_ids, None, str(errors[key]), str(path)))
+            continue
+        rows = groups[key]
+        numbers = [n for n, _ in comments] + [header[0]] + [n for n, _ in rows]
+        body = [c for _, c in comments] + [sub_header] + [r for _, r in rows]
+        try:
+            data = _load_text(path, "\n".join(body), numbers, available_probes,
+                              pressure_range_mbar, range_note, metadata=entry_ids)
+        except MeasuredDataError as err:
+            entries.append(StudyEntry(entry_ids, None, str(err), str(path)))
+            continue
+        entries.append(StudyEntry(entry_ids, data, None, str(path)))
+    if not entries:
+        entries.append(StudyEntry(base_ids, None, str(MeasuredDataError(
+            path, len(lines), None, "no data rows after the header")), str(path)))
+    return entries

@@ -1,0 +1,594 @@
+"""Whole clinical studies at once: every curve identified (with intervals) and diagnosed.
+
+A study is a folder of measured CSVs (one measurement per file, or long files
+with id columns) or one long CSV whose columns besides ``probe_mm``,
+``pressure_mbar``, ``deflection_mm`` and ``curve`` are ids (``subject``,
+``site``, ``visit``, ``group``, ...).  A file's ``# key: value`` lines and an
+optional ``manifest.csv`` (a ``file`` column and id columns) or
+``manifest.yaml`` (``{file: {key: value}}``) in the folder add ids.  Every
+measurement keeps its ids end to end; one that the loader rejects becomes a row
+with its error, and the study goes on.
+
+:func:`run_study` identifies (X1d, X1h) of each measurement with 95 %
+profile-likelihood intervals (weighted objective when both probes are present,
+else the single objective of its probe), diagnoses it (optional), and writes
+
+* ``curves.parquet``: one row per measurement (ids, source and its SHA-256,
+  estimates with intervals, E, noise, misfit, named cause, extended parameter
+  with its interval, gain, warnings, error);
+* ``comparison.csv`` and ``summary.md``: the group comparison
+  (:func:`compare_groups`) and the counts;
+* figures: parameter distributions per group, paired before/after per subject
+  (with a ``visit`` column), share of each named cause per group;
+* ``reports/<row>/`` per measurement (identification and diagnosis files),
+  only if asked (big studies would write thousands of folders).
+
+Group comparison
+    With ``subject`` and ``visit`` columns the design is paired: the change of
+    log X1d between the first two visits of each subject.  Within each group,
+    the Wilcoxon signed-rank test (two-sided) tests a zero median change; its
+    effect size is the median change in % with a bootstrap 95 % interval
+    (seeded) and the matched-pairs rank-biserial correlation.  Between groups,
+    the Mann-Whitney U test compares the changes of each group with those of
+    the reference group (rank-biserial effect size).  Why rank tests: moduli
+    are skewed and a misfitting curve can give an outlier, and with one pair
+    per subject the paired test removes the inter-subject spread (40-70 % in
+    X1d) as a mixed model with a random intercept would, without assuming
+    normal residuals.  Without visits, groups are compared by Mann-Whitney on
+    log X1d.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["discover", "run_study", "compare_groups", "study_rows", "RESULT_COLUMNS"]
+
+#: Result columns of curves.parquet (ids come first; an id with one of these names
+#: is renamed ``id_<name>``).
+RESULT_COLUMNS = (
+    "row", "source", "sha256", "probes_mm", "objective", "n_points",
+    "x1d_mpa", "x1d_lower_mpa", "x1d_upper_mpa", "x1d_lower_open", "x1d_upper_open",
+    "x1h_mpa", "x1h_lower_mpa", "x1h_upper_mpa", "x1h_lower_open", "x1h_upper_open",
+    "e_dermis_kpa", "e_dermis_lower_kpa", "e_dermis_upper_kpa", "correlation_x1d_x1h",
+    "E_um", "noise_um", "noise_method", "misfit_scale", "at_bound",
+    "systematic_misfit", "misfit_p_value", "cause", "verdict", "ambiguous_with",
+    "extra_parameter", "extra_unit", "extra_value", "extra_lower", "extra_upper",
+    "gain_E_ratio", "delta_bic", "warnings", "error", "seed", "seconds",
+)
+
+MANIFESTS = ("manifest.csv", "manifest.yaml", "manifest.yml")
+
+
+def _sha256(path) -> str | None:
+    from skinsuction.identify.measured_fit import file_sha256
+
+    try:
+        return file_sha256(path)
+    except OSError:
+        return None
+
+
+def _manifest(folder: Path) -> dict:
+    """``{file name: {id: value}}`` from the folder's manifest, if any."""
+    for name in MANIFESTS:
+        path = folder / name
+        if not path.exists():
+            continue
+        if path.suffix == ".csv":
+            import pandas as pd
+
+            table = pd.read_csv(path, dtype=str, keep_default_na=False)
+            if "file" not in table.columns:
+                raise ValueError(f"{path}: a manifest needs a 'file' column")
+            return {r.pop("file"): r for r in table.to_dict("records")}
+        import yaml
+
+        try:
+            data = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+        except yaml.YAMLError as err:
+            raise ValueError(f"{path}: not valid YAML ({' '.join(str(err).split())})") from None
+        if not isinstance(data, dict):
+            raise ValueError(f"{path}: the manifest must map file names to ids")
+        return {str(k): {str(a): str(b) for a, b in (v or {}).items()} for k, v in data.items()}
+    return {}
+
+
+def discover(path, *, available_probes=None, pressure_range_mbar=None, range_note=None) -> list:
+    """The measurements of a study: ``[(StudyEntry, sha256)]`` in a stable order.
+
+    ``path`` is a folder (its ``*.csv`` files, sorted, subfolders included, the
+    manifest excluded) or one CSV.  Each entry's ids include ``file`` (the path
+    relative to the folder).
+    """
+    from skinsuction.measured import load_table
+
+    path = Path(path)
+    if not path.exists():
+        raise FileNotFoundError(f"{path}: no such study folder or file")
+    if path.is_dir():
+        manifest = _manifest(path)
+        files = sorted(p for p in path.rglob("*.csv") if p.name not in MANIFESTS)
+        if not files:
+            raise ValueError(f"{path}: no .csv files in the study folder")
+    else:
+        manifest, files = {}, [path]
+    out = []
+    for f in files:
+        rel = f.relative_to(path).as_posix() if path.is_dir() else f.name
+        ids = {"file": rel, **manifest.get(rel, manifest.get(f.name, {}))}
+        sha = _sha256(f)
+        for entry in load_table(f, ids=ids, available_probes=available_probes,
+                                pressure_range_mbar=pressure_range_mbar, range_note=range_note):
+            out.append((entry, sha))
+    return out
+
+
+# ------------------------------------------------------------------ one measurement
+_CTX: dict = {}
+
+
+def _init(ctx):
+    _CTX.clear()
+    _CTX.update(ctx)
+
+
+def _objective_for(data):
+    probes = {round(p, 6) for p in data.probes}
+    if {2.0, 6.0} <= probes:
+        return {"objective": "weighted"}
+    return {"objective": "single", "probe_mm": max(probes)}
+
+
+def _interval_columns(prefix, iv, unit_scale=1.0, suffix="mpa"):
+    if not iv:
+        return {}
+    return {f"{prefix}_lower_{suffix}": iv["lower"] * unit_scale,
+            f"{prefix}_upper_{suffix}": iv["upper"] * unit_scale,
+            f"{prefix}_lower_open": bool(iv["lower_open"]),
+            f"{prefix}_upper_open": bool(iv["upper_open"])}
+
+
+def _analyse(job):
+    """Identify (and diagnose) one measurement; never raises: errors become the row's."""
+    index, entry, sha = job
+    from skinsuction.identify.measured_fit import identify_data, write_identification
+
+    t0 = time.perf_counter()
+    ctx = _CTX
+    seed = int(ctx["seed"]) + index
+    row = {"row": index, "source": entry.source, "sha256": sha, "seed": seed,
+           "error": entry.error}
+    if entry.data is None:
+        return row
+    data = entry.data
+    row["probes_mm"] = ",".join(f"{p:g}" for p in data.probes)
+    row["n_points"] = int(sum(len(c) for c in data.curves))
+    ident = diag = None
+    try:
+        kw = _objective_for(data)
+        ident = identify_data(data, ctx["space"], repeats=ctx["repeats"], seed=seed,
+                              level=ctx["level"], **kw)
+    except ValueError as err:
+        row["error"] = f"{entry.source}: {' '.join(str(err).split())}"
+        row["seconds"] = time.perf_counter() - t0
+        return row
+    est, iv = ident["estimate"], ident["intervals"] or {}
+    row.update({"objective": ident["settings"]["objective"]
+                + (f" {kw['probe_mm']:g} mm" if "probe_mm" in kw else ""),
+                "x1d_mpa": est["x1d_mpa"], "x1h_mpa": est["x1h_mpa"],
+                "e_dermis_kpa": 6e3 * est["x1d_mpa"],
+                "E_um": ident["E"]["at_estimate"],
+                "noise_um": (ident["noise"] or {}).get("sd_um"),
+                "noise_method": (ident["noise"] or {}).get("method"),
+                "misfit_scale": iv.get("misfit_scale"),
+                "correlation_x1d_x1h": (iv.get("correlation") or {}).get("X1d,X1h"),
+                "at_bound": ",".join(k for k, f in ident["at_bound"].items() if f["at_bound"]),
+                **_interval_columns("x1d", iv.get("X1d")),
+                **_interval_columns("x1h", iv.get("X1h"))})
+    if iv.get("X1d"):
+        row["e_dermis_lower_kpa"] = 6e3 * iv["X1d"]["lower"]
+        row["e_dermis_upper_kpa"] = 6e3 * iv["X1d"]["upper"]
+    warnings = list(ident["warnings"])
+    if ctx.get("ray_spaces") is not None:
+        from skinsuction.diagnose._diagnose import diagnose
+
+        try:
+            diag = diagnose(data, ctx["ray_spaces"], ctx["settings"].__class__(
+                **{**ctx["settings"].__dict__, "seed": seed}),
+                source={"file": entry.source, "sha256": sha})
+            row.update(_diagnosis_columns(diag))
+        except ValueError as err:
+            warnings.append(f"diagnosis failed: {' '.join(str(err).split())}")
+    row["warnings"] = "; ".join(warnings)
+    row["seconds"] = time.perf_counter() - t0
+    if ctx.get("reports_dir") is not None:
+        out = Path(ctx["reports_dir"]) / f"{index:05d}"
+        write_identification(ident, out / "identification")
+        if diag is not None:
+            from skinsuction.diagnose._report import write_report
+
+            write_report(diag, out / "diagnosis")
+    return row
+
+
+def _diagnosis_columns(d: dict) -> dict:
+    base = d["baseline"]
+    out = {"systematic_misfit": bool(base["systematic_misfit"]),
+           "misfit_p_value": base["misfit_test"]["p_value"],
+           "cause": d["cause"], "verdict": d["verdict"],
+           "ambiguous_with": ",".join(d.get("ambiguous_with") or [])}
+    chosen = next((c for c in d["candidates"] if c["cause"] == d["cause"]), None)
+    if chosen is not None:
+        x = chosen["extra_parameter"]
+        ci = (chosen.get("intervals") or {}).get(x["symbol"]) or {}
+        out.update({"extra_parameter": x["symbol"], "extra_unit": x["unit"],
+                    "extra_value": x["value"], "extra_lower": ci.get("lower"),
+                    "extra_upper": ci.get("upper"),
+                    "gain_E_ratio": chosen["E_ratio"], "delta_bic": chosen["delta_bic"]})
+    return out
+
+
+# ------------------------------------------------------------------ the study
+class _Progress:
+    """A bar on a terminal, a line every ``every`` seconds in a log."""
+
+    def __init__(self, total: int, stream=None, every: float = 10.0):
+        self.total, self.done, self.t0 = total, 0, time.perf_counter()
+        self.stream = stream or sys.stderr
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.every, self.last = every, -math.inf
+
+    def step(self):
+        self.done += 1
+        now = time.perf_counter() - self.t0
+        eta = now / self.done * (self.total - self.done)
+        if self.tty:
+            bar = "#" * int(30 * self.done / self.total)
+            self.stream.write(f"\rstudy [{bar:<30}] {self.done}/{self.total} "
+                              f"{now:.0f} s, {eta:.0f} s left ")
+            if self.done == self.total:
+                self.stream.write("\n")
+            self.stream.flush()
+        elif now - self.last >= self.every or self.done == self.total:
+            self.last = now
+            print(f"study: {self.done}/{self.total} measurements "
+                  f"({100 * self.done / self.total:.0f} %), {now:.0f} s, about {eta:.0f} s left",
+                  file=self.stream, flush=True)
+
+
+def study_rows(entries, *, space, ray_spaces=None, settings=None, repeats: int = 2,
+               seed: int = 0, level: float = 0.95, workers: int = 1, reports_dir=None,
+               progress=None) -> list:
+    """Rows (dicts) of :data:`RESULT_COLUMNS` plus ids, one per entry of :func:`discover`."""
+    ctx = {"space": space, "ray_spaces": ray_spaces, "settings": settings,
+           "repeats": int(repeats), "seed": int(seed), "level": float(level),
+           "reports_dir": reports_dir}
+    jobs = [(i, e, sha) for i, (e, sha) in enumerate(entries)]
+    bar = _Progress(len(jobs), progress) if progress is not False else None
+    rows = []
+    if workers > 1 and len(jobs) > 1:
+        import multiprocessing as mp
+
+        # fork: the workers share the spaces read once by the parent
+        with mp.get_context("fork").Pool(workers, initializer=_init, initargs=(ctx,)) as pool:
+            for row in pool.imap(_analyse, jobs, chunksize=1):
+                rows.append(row)
+                if bar:
+                    bar.step()
+    else:
+        _init(ctx)
+        for job in jobs:
+            rows.append(_analyse(job))
+            if bar:
+                bar.step()
+    out = []
+    for (entry, _), row in zip(entries, rows):
+        ids = {(f"id_{k}" if k in RESULT_COLUMNS else k): str(v) for k, v in entry.ids.items()}
+        out.append({**ids, **row})
+    return out
+
+
+def _frame(rows):
+    import pandas as pd
+
+    df = pd.DataFrame(rows)
+    for c in RESULT_COLUMNS:
+        if c not in df.columns:
+            df[c] = None
+    id_cols = [c for c in df.columns if c not in RESULT_COLUMNS]
+    df = df[id_cols + list(RESULT_COLUMNS)]
+    for c in ("x1d_lower_open", "x1d_upper_open", "x1h_lower_open", "x1h_upper_open",
+              "systematic_misfit"):
+        df[c] = df[c].astype("boolean")
+    for c in RESULT_COLUMNS:
+        if df[c].dtype == object and c not in ("systematic_misfit",):
+            vals = [v for v in df[c] if v is not None and not (isinstance(v, float)
+                                                                and math.isnan(v))]
+            if vals and all(isinstance(v, (int, float, np.number)) and not isinstance(v, bool)
+                            for v in vals):
+                df[c] = df[c].astype("float64")
+            elif not vals or all(isinstance(v, str) for v in vals):
+                df[c] = df[c].astype("string")
+    return df, id_cols
+
+
+# ------------------------------------------------------------------ group comparison
+def _bootstrap_median(x, rng, n=10000):
+    x = np.asarray(x, dtype=float)
+    idx = rng.integers(0, x.size, size=(n, x.size))
+    meds = np.median(x[idx], axis=1)
+    return np.percentile(meds, [2.5, 97.5])
+
+
+def _rank_biserial_paired(d):
+    from scipy.stats import rankdata
+
+    d = np.asarray(d, dtype=float)
+    d = d[d != 0]
+    if d.size == 0:
+        return 0.0
+    r = rankdata(np.abs(d))
+    return float((r[d > 0].sum() - r[d < 0].sum()) / r.sum())
+
+
+def _rank_biserial(u, n1, n2) -> float:
+    """Rank-biserial correlation of a Mann-Whitney U of the first sample (+1: it is larger)."""
+    return float(2.0 * u / (n1 * n2) - 1.0)
+
+
+def compare_groups(df, parameter: str = "x1d_mpa", *, reference=None, seed: int = 0):
+    """The group comparison of a study (method in the module docstring).
+
+    Returns ``(rows, notes)``: one dict per test with ``group``, ``test``,
+    ``n``, ``median_change_percent`` (or medians), its bootstrap interval,
+    ``statistic``, ``p_value``, ``effect_size`` (rank-biserial), and text notes
+    (excluded measurements, the design used).
+    """
+    from scipy import stats
+
+    rng = np.random.default_rng(seed)
+    ok = df[df[parameter].notna() & (df[parameter] > 0)].copy()
+    notes = []
+    n_bad = int(len(df) - len(ok))
+    if n_bad:
+        notes.append(f"{n_bad} measurement(s) without an estimate (errors) are left out")
+    group_col = "group" if "group" in ok.columns else None
+    if group_col is None:
+        ok["group"] = "all"
+        group_col = "group"
+    groups = sorted(ok[group_col].astype(str).unique())
+    ref = reference if reference in groups else ("control" if "control" in groups else groups[0])
+    ok["log_value"] = np.log(ok[parameter].astype(float))
+    rows = []
+    paired = {"subject", "visit"} <= set(ok.columns)
+    if paired:
+        visits = sorted(ok["visit"].astype(str).unique(), key=lambda v: (len(v), v))
+        if len(visits) < 2:
+            paired = False
+    if paired:
+        v1, v2 = visits[:2]
+        notes.append(f"paired design: change of log {parameter} from visit {v1} to visit {v2} "
+                     "per subject")
+        changes = {}
+        for g in groups:
+            sub = ok[ok[group_col].astype(str) == g]
+            wide = sub.pivot_table(index="subject", columns=sub["visit"].astype(str),
+                                   values="log_value", aggfunc="mean")
+            complete = wide.dropna(subset=[c for c in (v1, v2) if c in wide.columns]) \
+                if {v1, v2} <= set(wide.columns) else wide.iloc[0:0]
+            dropped = len(wide) - len(complete)
+            if dropped:
+                notes.append(f"group {g}: {dropped} subject(s) without both visits are left out")
+            d = (complete[v2] - complete[v1]).to_numpy() if len(complete) else np.array([])
+            changes[g] = d
+            if d.size < 2:
+                rows.append({"group": g, "test": "Wilcoxon signed-rank (paired)", "n": int(d.size),
+                             "p_value": None})
+                continue
+            w = stats.wilcoxon(d, alternative="two-sided")
+            lo, hi = _bootstrap_median(d, rng)
+            rows.append({"group": g, "comparison": f"visit {v2} vs {v1}",
+                         "test": "Wilcoxon signed-rank (paired, two-sided)", "n": int(d.size),
+                         "median_change_percent": 100 * (math.exp(float(np.median(d))) - 1),
+                         "ci_low_percent": 100 * (math.exp(lo) - 1),
+                         "ci_high_percent": 100 * (math.exp(hi) - 1),
+                         "statistic": float(w.statistic), "p_value": float(w.pvalue),
+                         "effect_size": _rank_biserial_paired(d),
+                         "effect_size_name": "matched-pairs rank-biserial"})
+        for g in groups:
+            if g == ref or changes[g].size < 2 or changes[ref].size < 2:
+                continue
+            u = stats.mannwhitneyu(changes[g], changes[ref], alternative="two-sided")
+            diff = np.median(changes[g]) - np.median(changes[ref])
+            boot = [np.median(rng.choice(changes[g], changes[g].size))
+                    - np.median(rng.choice(changes[ref], changes[ref].size)) for _ in range(4000)]
+            lo, hi = np.percentile(boot, [2.5, 97.5])
+            rows.append({"group": f"{g} vs {ref}", "comparison": f"change {v1} -> {v2}",
+                         "test": "Mann-Whitney U (two-sided) on the paired changes",
+                         "n": int(changes[g].size + changes[ref].size),
+                         "median_change_percent": 100 * (math.exp(diff) - 1),
+                         "ci_low_percent": 100 * (math.exp(lo) - 1),
+                         "ci_high_percent": 100 * (math.exp(hi) - 1),
+                         "statistic": float(u.statistic), "p_value": float(u.pvalue),
+                         "effect_size": _rank_biserial(u.statistic, changes[g].size,
+                                                       changes[ref].size),
+                         "effect_size_name": "rank-biserial"})
+    else:
+        notes.append(f"unpaired design: log {parameter} compared between groups")
+        base = ok[ok[group_col].astype(str) == ref]["log_value"].to_numpy()
+        for g in groups:
+            if g == ref:
+                continue
+            x = ok[ok[group_col].astype(str) == g]["log_value"].to_numpy()
+            if x.size < 2 or base.size < 2:
+                continue
+            u = stats.mannwhitneyu(x, base, alternative="two-sided")
+            rows.append({"group": f"{g} vs {ref}", "comparison": parameter,
+                         "test": "Mann-Whitney U (two-sided)", "n": int(x.size + base.size),
+                         "median_change_percent": 100 * (math.exp(np.median(x)
+                                                                  - np.median(base)) - 1),
+                         "statistic": float(u.statistic), "p_value": float(u.pvalue),
+                         "effect_size": _rank_biserial(u.statistic, x.size, base.size),
+                         "effect_size_name": "rank-biserial"})
+    return rows, notes
+
+
+# ------------------------------------------------------------------ writing
+def _md_table(rows, cols):
+    head = "| " + " | ".join(cols) + " |\n|" + "---|" * len(cols) + "\n"
+    body = ""
+    for r in rows:
+        cells = []
+        for c in cols:
+            v = r.get(c)
+            cells.append("" if v is None or (isinstance(v, float) and math.isnan(v)) else
+                         (f"{v:.3g}" if isinstance(v, float) else str(v)))
+        body += "| " + " | ".join(cells) + " |\n"
+    return head + body
+
+
+def _summary_md(df, id_cols, comparison, notes, meta) -> str:
+    n, errors = len(df), df[df["error"].notna()]
+    lines = [f"# Study {meta['name']}", "",
+             f"{n} measurements from {meta['path']}: {n - len(errors)} identified, "
+             f"{len(errors)} with an error. Identification with 95 % profile-likelihood "
+             f"intervals on {meta['space']}; diagnosis: {'yes' if meta['diagnose'] else 'no'}. "
+             f"{meta['seconds']:.1f} s on {meta['workers']} worker(s).", ""]
+    if "group" in df.columns:
+        lines += ["## X1d per group", "",
+                  "| group | visit | n | median X1d (MPa) | IQR (MPa) | median interval width |",
+                  "|---|---|---|---|---|---|"]
+        keys = ["group"] + (["visit"] if "visit" in df.columns else [])
+        for key, g in df[df["x1d_mpa"].notna()].groupby(keys):
+            key = key if isinstance(key, tuple) else (key,)
+            x = g["x1d_mpa"].astype(float)
+            w = ((g["x1d_upper_mpa"] - g["x1d_lower_mpa"]) / g["x1d_mpa"]).astype(float)
+            lines.append(f"| {key[0]} | {key[1] if len(key) > 1 else ''} | {len(g)} | "
+                         f"{x.median():.4g} | {x.quantile(0.25):.3g}-{x.quantile(0.75):.3g} | "
+                         f"{100 * w.median():.2g} % |")
+        lines.append("")
+    lines += ["## Group comparison", "", *[f"- {t}" for t in notes], "",
+              _md_table(comparison, ["group", "comparison", "test", "n", "median_change_percent",
+                                     "ci_low_percent", "ci_high_percent", "p_value",
+                                     "effect_size"]),
+              "median_change_percent: median change of X1d in % (between groups: difference "
+              "of the median changes); ci: bootstrap 95 % interval; effect size: rank-biserial "
+              "correlation.", ""]
+    if df["cause"].notna().any():
+        lines += ["## Named causes (diagnosis)", ""]
+        key = "group" if "group" in df.columns else None
+        tab = (df.groupby(key)["cause"].value_counts().unstack(fill_value=0) if key
+               else df["cause"].value_counts().to_frame().T)
+        lines += ["| " + (key or "") + " | " + " | ".join(tab.columns) + " |",
+                  "|---|" + "---|" * len(tab.columns)]
+        for idx, r in tab.iterrows():
+            lines.append(f"| {idx} | " + " | ".join(str(int(v)) for v in r) + " |")
+        lines.append("")
+    if len(errors):
+        lines += ["## Errors", ""]
+        for _, r in errors.iterrows():
+            ids = ", ".join(f"{c}={r[c]}" for c in id_cols if r[c] is not None
+                            and str(r[c]) not in ("", "<NA>", "nan"))
+            lines.append(f"- {ids}: {r['error']}")
+        lines.append("")
+    lines += [f"Written {meta['created_utc']} by skinsuction {meta['version']}.", ""]
+    return "\n".join(lines)
+
+
+def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
+              diagnose: bool = True, repeats: int = 2, seed: int = 0, level: float = 0.95,
+              workers: int = 1, reports: bool = False, name: str | None = None,
+              diagnosis_settings: dict | None = None, figures: bool = True,
+              progress=None) -> dict:
+    """Identify (and diagnose) every measurement of a study and write its outputs.
+
+    Parameters
+    ----------
+    path : path-like
+        A folder of measured CSVs or one long CSV (see the module docstring).
+    out_dir : path-like
+        Output folder (``curves.parquet``, ``comparison.csv``, ``summary.md``,
+        figures, ``study.json`` with the settings and versions).
+    space_dir : path-like
+        The scale-free simulated space.
+    diagnose : bool
+        Diagnose every measurement too (slower: seconds each).
+    repeats, seed, level :
+        Window focusing runs per identification, the study's seed (measurement
+        ``i`` uses ``seed + i``), the confidence level of the intervals.
+    workers : int
+        Processes (each measurement is independent).
+    reports : bool
+        Also write the identification and diagnosis files of each measurement.
+
+    Returns
+    -------
+    dict
+        Paths written, counts and timings.
+    """
+    from skinsuction import __version__
+    from skinsuction.identify.measured_fit import load_space
+    from skinsuction.space import atomic_output
+
+    t0 = time.perf_counter()
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    space = load_space(space_dir)
+    entries = discover(path, available_probes=list(space.spaces),
+                       pressure_range_mbar=space.pressure_range(list(space.spaces)),
+                       range_note=space.range_note(list(space.spaces)))
+    ray_spaces, settings = None, None
+    if diagnose:
+        from skinsuction.diagnose._diagnose import Settings
+        from skinsuction.diagnose._rays import read_ray_spaces
+
+        ray_spaces = read_ray_spaces(space_dir)
+        settings = Settings.from_config(**{"holdout": False, "repeats": 1, "level": level,
+                                           **(diagnosis_settings or {})})
+    rows = study_rows(entries, space=space, ray_spaces=ray_spaces, settings=settings,
+                      repeats=repeats, seed=seed, level=level, workers=workers,
+                      reports_dir=(out / "reports") if reports else None, progress=progress)
+    df, id_cols = _frame(rows)
+    comparison, notes = compare_groups(df, seed=seed)
+    seconds = time.perf_counter() - t0
+    meta = {"name": name or Path(path).stem, "path": str(path), "space": str(space_dir),
+            "space_sha256": space.info.get("sha256"), "diagnose": bool(diagnose),
+            "repeats": int(repeats), "seed": int(seed), "level": float(level),
+            "workers": int(workers), "seconds": seconds, "version": __version__,
+            "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+            "measurements": int(len(df)), "errors": int(df["error"].notna().sum()),
+            "diagnosis_settings": settings.__dict__ if settings is not None else None}
+    paths = {"curves": out / "curves.parquet", "comparison": out / "comparison.csv",
+             "summary": out / "summary.md", "study": out / "study.json"}
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}),
+                                           b"skinsuction": json.dumps(meta, default=str).encode()})
+    with atomic_output(paths["curves"]) as tmp:
+        pq.write_table(table, tmp)
+    import pandas as pd
+
+    with atomic_output(paths["comparison"]) as tmp:
+        pd.DataFrame(comparison).to_csv(tmp, index=False)
+    with atomic_output(paths["summary"]) as tmp:
+        tmp.write_text(_summary_md(df, id_cols, comparison, notes, meta), encoding="utf-8")
+    with atomic_output(paths["study"]) as tmp:
+        tmp.write_text(json.dumps({**meta, "comparison": comparison, "notes": notes},
+                                  indent=1, default=str) + "\n", encoding="utf-8")
+    if figures:
+        from skinsuction.figures.cohort import write_study_figures
+
+        paths.update(write_study_figures(df, out))
+    return {"paths": {k: str(v) for k, v in paths.items()}, "measurements": int(len(df)),
+            "errors": meta["errors"], "seconds": seconds, "comparison": comparison,
+            "notes": notes}
