@@ -9,6 +9,7 @@
 #        -> FE ray bundles -> the scale-free space (identify/diagnose default) + coverage
 #        -> identifications (Figures 4, 4b, 7, 8, timing and optimiser tables)
 #        -> diagnoses of measured files on the scale-free space (reports, Figures 5, 6)
+#        -> whole studies: every curve identified with intervals and diagnosed
 
 
 configfile: "config/config.yaml"
@@ -35,6 +36,11 @@ if "diagnosis" in config:
     include: "workflow/rules/diagnose.smk"
 
 
+if "studies" in config:
+
+    include: "workflow/rules/study.smk"
+
+
 
 report: "workflow/report/workflow.rst"
 
@@ -49,4 +55,5 @@ rule all:
         SCALE_FREE_OUTPUTS if "scale_free_space" in config else [],
         IDENTIFICATION_OUTPUTS if "identification" in config else [],
         DIAGNOSIS_OUTPUTS if "diagnosis" in config else [],
+        STUDY_OUTPUTS if "studies" in config else [],
     default_target: True

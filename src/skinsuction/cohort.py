@@ -507,7 +507,7 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
               diagnose: bool = True, repeats: int = 2, seed: int = 0, level: float = 0.95,
               workers: int = 1, reports: bool = False, name: str | None = None,
               diagnosis_settings: dict | None = None, figures: bool = True,
-              progress=None) -> dict:
+              progress=None, space=None, ray_spaces=None) -> dict:
     """Identify (and diagnose) every measurement of a study and write its outputs.
 
     Parameters
@@ -528,6 +528,10 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
         Processes (each measurement is independent).
     reports : bool
         Also write the identification and diagnosis files of each measurement.
+    space, ray_spaces : optional
+        A :class:`skinsuction.identify.measured_fit.LoadedSpace` and the ray
+        spaces ``{name: RaySpace}`` instead of reading ``space_dir`` (tests,
+        notebooks).
 
     Returns
     -------
@@ -541,18 +545,22 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
     t0 = time.perf_counter()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    space = load_space(space_dir)
+    space = space if space is not None else load_space(space_dir)
     entries = discover(path, available_probes=list(space.spaces),
                        pressure_range_mbar=space.pressure_range(list(space.spaces)),
                        range_note=space.range_note(list(space.spaces)))
-    ray_spaces, settings = None, None
-    if diagnose:
+    settings = None
+    if not diagnose:
+        ray_spaces = None
+    else:
         from skinsuction.diagnose._diagnose import Settings
         from skinsuction.diagnose._rays import read_ray_spaces
 
-        ray_spaces = read_ray_spaces(space_dir)
-        settings = Settings.from_config(**{"holdout": False, "repeats": 1, "level": level,
-                                           **(diagnosis_settings or {})})
+        ray_spaces = ray_spaces if ray_spaces is not None else read_ray_spaces(space_dir)
+        # the study's default: one window focusing run per fit, no holdout (seconds saved
+        # per measurement); any decision or fit key of the configuration overrides
+        settings = Settings.from_config(None, {"holdout": False, "repeats": 1,
+                                               **(diagnosis_settings or {})}, level=level)
     rows = study_rows(entries, space=space, ray_spaces=ray_spaces, settings=settings,
                       repeats=repeats, seed=seed, level=level, workers=workers,
                       reports_dir=(out / "reports") if reports else None, progress=progress)

@@ -92,6 +92,14 @@ def code_hash(*parts):
         return "missing"
 
 
+def study_files(path):
+    """Every file of a study folder (or the long CSV itself): inputs of its rule."""
+    p = Path(path)
+    if p.is_dir():
+        return sorted(str(f) for f in p.rglob("*") if f.is_file() and not f.name.startswith("."))
+    return [str(p)]
+
+
 # ------------------------------------------------------------------ input lists
 def curve_file(point):
     return f"results/curves/{point}.parquet"

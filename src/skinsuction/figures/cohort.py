@@ -122,21 +122,31 @@ def plot_causes(df):
     return fig
 
 
+def _empty(text):
+    import matplotlib.pyplot as plt
+
+    with _style.style():
+        fig, ax = plt.subplots(figsize=(_style.WIDTH_IN * 0.5, 1.2))
+        ax.axis("off")
+        ax.text(0.5, 0.5, text, ha="center", va="center", fontsize=8)
+    return fig
+
+
 def write_study_figures(df, out_dir) -> dict:
     """Write the study's figures (PNG and PDF) that its columns allow; returns their paths."""
     import matplotlib.pyplot as plt
 
     out = Path(out_dir)
     made = {}
-    todo = [("distribution_x1d", plot_distributions)]
-    if {"subject", "visit"} <= set(df.columns) and df["x1d_mpa"].notna().any():
-        todo.append(("paired_x1d", plot_paired))
-    if df["cause"].notna().any():
-        todo.append(("causes", plot_causes))
-    for name, fn in todo:
-        if not df["x1d_mpa"].notna().any():
-            break
-        fig = fn(df)
+    has = df["x1d_mpa"].notna().any()
+    todo = [("distribution_x1d", plot_distributions, has, "no measurement was identified"),
+            ("paired_x1d", plot_paired, has and {"subject", "visit"} <= set(df.columns),
+             "no paired design (the study has no subject and visit columns)"),
+            ("causes", plot_causes, df["cause"].notna().any(),
+             "no diagnosis (run the study with diagnosis)")]
+    for name, fn, possible, why in todo:
+        # every figure is written (a workflow output), with the reason where it is empty
+        fig = fn(df) if possible else _empty(why)
         png, pdf = out / f"{name}.png", out / f"{name}.pdf"
         _style.save(fig, png, pdf)
         plt.close(fig)
