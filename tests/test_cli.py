@@ -64,7 +64,7 @@ def test_identify_help(capsys):
 def test_commands_registry_is_the_parser():
     parser = cli.build_parser()
     sub = next(a for a in parser._actions if a.dest == "command")
-    assert set(sub.choices) == set(cli.COMMANDS) == {"simulate", "identify", "diagnose"}
+    assert set(sub.choices) == set(cli.COMMANDS) == {"simulate", "identify", "diagnose", "study"}
 
 
 # ------------------------------------------------------------------ simulate
@@ -305,3 +305,16 @@ def test_diagnose_without_spaces_is_a_one_line_input_error(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert code == 2
     assert len(err.splitlines()) == 1 and "no_spaces" in err
+
+
+# ------------------------------------------------------------------ seeds, study
+@pytest.mark.parametrize("command", ["identify", "diagnose"])
+def test_negative_seed_is_a_usage_error(command, capsys, tmp_path):
+    extra = ["--objective", "single"] if command == "identify" else []
+    code, _, err = run([command, "m.csv", "--out", str(tmp_path), "--seed", "-1", *extra], capsys)
+    assert code == 2 and "must be >= 0" in err
+
+
+def test_study_of_a_missing_folder_is_a_one_line_error(capsys, tmp_path):
+    code, _, err = run(["study", str(tmp_path / "nowhere"), "--out", str(tmp_path / "o")], capsys)
+    assert code == 2 and "no such study folder" in err and "Traceback" not in err

@@ -543,6 +543,8 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
     from skinsuction.space import atomic_output
 
     t0 = time.perf_counter()
+    if not Path(path).exists():
+        raise FileNotFoundError(f"{path}: no such study folder or file")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     space = space if space is not None else load_space(space_dir)
