@@ -235,3 +235,51 @@ def test_random_numeric_tables(rows, with_curve):
     header = HEADER + (",curve" if with_curve else "")
     body = [f"{a!r},{b!r},{c!r}" + (",r1" if with_curve else "") for a, b, c in rows]
     _assert_loads_or_clean_error("\n".join([header, *body]))
+
+
+# ------------------------------------------------------------------ plausibility (per probe)
+def _curve_file(tmp_path, rows, probe=6):
+    path = tmp_path / "c.csv"
+    path.write_text("probe_mm,pressure_mbar,deflection_mm\n"
+                    + "".join(f"{probe},{p:g},{m:g}\n" for p, m in rows))
+    return path
+
+
+GOOD = [(0, 0.0), (25, 0.21), (50, 0.38), (75, 0.52), (100, 0.64)]
+
+
+@pytest.mark.parametrize("rows, probe, words", [
+    ([(p, 0.0) for p, _ in GOOD], 6, "all 0"),
+    ([(0, 0), (25, 0.5), (50, 0.4), (75, 0.3), (100, 0.2)], 6, "falls with the pressure"),
+    ([(p, m + 0.3) for p, m in GOOD], 6, "zeroed at 0 mbar"),
+    ([(p, 15 * m / 0.64) for p, m in GOOD], 2, "looks like µm"),  # 2 mm curve in µm, max 15
+    ([(p, 0.0015 * m / 0.64) for p, m in GOOD], 6, "looks like metres"),
+    ([(0, 0), (-50, 0.2), (-100, 0.4)], 6, "negative; give the suction as positive"),
+    ([(p, 4.0 * m / 0.64) for p, m in GOOD], 2, "beyond the 2 mm aperture"),
+])
+def test_implausible_curves_are_one_line_errors(tmp_path, rows, probe, words):
+    with pytest.raises(MeasuredDataError) as err:
+        load_measured(_curve_file(tmp_path, rows, probe))
+    assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_noisy_but_real_curve_passes_and_a_low_pressure_curve_is_a_warning(tmp_path):
+    rng = np.random.default_rng(0)
+    p = np.arange(0.0, 101.0, 2.0)
+    m = 0.004 * (p / 100) + rng.normal(0, 0.002, p.size)  # stiff skin: 4 µm dome, 2 µm noise
+    m[0] = 0.0
+    data = load_measured(_curve_file(tmp_path, zip(p, m), probe=2))
+    assert data.warnings == ()
+    kpa = load_measured(_curve_file(tmp_path, [(p / 10, m) for p, m in GOOD]))
+    assert any("multiply by 10" in w for w in kpa.warnings)
+
+
+def test_a_huge_file_fails_fast_with_a_located_error(tmp_path):
+    path = tmp_path / "huge.csv"
+    with open(path, "w") as f:
+        f.write("probe_mm,pressure_mbar,deflection_mm\n")
+        for k in range(20_001):
+            f.write(f"6,{k * 0.01:.2f},{k * 1e-5:.5f}\n")
+    with pytest.raises(MeasuredDataError) as err:
+        load_measured(path)
+    assert "more than 10000 points" in str(err.value) and "line 10002" in str(err.value)

@@ -37,18 +37,31 @@ file) and, where it applies, the column.  The checks, in this order:
    ``available_probes`` (to 1e-6 mm); the pressures lie in
    ``pressure_range_mbar`` (to 1e-9 mbar).
 
-Unit rules (a Cutometer applies at most about 500 mbar, and the dome of the
-skin rises by millimetres, at most a few):
+Unit and plausibility rules, per curve (a Cutometer applies at most about
+500 mbar, and a dome cannot rise beyond its aperture):
 
-* pressures below zero: suction must be given as positive mbar;
+* pressures below zero: suction must be given as positive mbar (checked first:
+  0, -50, -100 mbar is a sign, not a new curve);
 * largest pressure above 1000 "mbar": looks like Pa (1 mbar = 100 Pa);
 * largest pressure above 0 but at most 1 "mbar": looks like bar or kPa
-  (100 mbar = 0.1 bar = 10 kPa).  A kPa curve that goes beyond 1 kPa cannot be
-  told from a low-pressure mbar curve and is not detected;
+  (100 mbar = 0.1 bar = 10 kPa);
 * no pressure above 0: a curve needs suction;
-* largest |deflection| above 20 "mm": looks like µm (1 mm = 1000 µm);
-* largest |deflection| above 0 but below 0.001 "mm": looks like metres;
-* deflections all <= 0 with some < 0: wrong sign (positive into the aperture).
+* largest pressure at most 20 mbar: a *warning* only (``MeasuredData.warnings``):
+  protocols apply 50-500 mbar and the file may be in kPa, but a low-pressure
+  protocol is possible;
+* largest |deflection| above the aperture diameter (or 20 mm): looks like µm;
+* all deflections 0: no dome was measured;
+* largest |deflection| below 1/1000 of the aperture diameter (6 µm under the
+  6 mm probe, 2 µm under the 2 mm one) or 0.001 mm: looks like metres;
+* deflections all <= 0 with some < 0: wrong sign (positive into the aperture);
+* a deflection at 0 mbar above 10 % of the largest and 0.01 mm: the curve must
+  be zeroed there (the instrument zeroes at 0 mbar);
+* a fall of the deflection below an earlier one by more than a quarter of the
+  curve's span and 0.02 mm, or a falling trend: it must grow with the pressure
+  (noise makes only small falls).
+
+Sizes: at most 10 000 points per curve, 2 000 000 lines and 256 MB per file, so
+that a wrong file fails fast instead of filling the memory.
 
 Examples
 --------
@@ -99,6 +112,19 @@ BAR_AT_MOST_MBAR = 1.0
 UM_ABOVE_MM = 20.0
 #: Largest |deflection| (mm) below which a curve "looks like metres".
 M_BELOW_MM = 1e-3
+#: A dome cannot rise beyond the aperture: the largest deflection of a curve must
+#: stay below this many aperture diameters ("looks like µm" otherwise).
+APERTURE_LIMIT = 1.0
+#: ... and above this many diameters, or the curve "looks like metres" (a dome of
+#: 6 µm under the 6 mm probe, 2 µm under the 2 mm probe, is below any skin's).
+APERTURE_FLOOR = 1e-3
+#: Largest pressure (mbar) at or below which a warning says "looks like kPa".
+LOW_PRESSURE_MBAR = 20.0
+#: Points per curve and rows per file: beyond them a file is refused before it
+#: fills the memory (a Cutometer curve has tens to hundreds of points).
+MAX_POINTS_PER_CURVE = 10_000
+MAX_ROWS_PER_FILE = 2_000_000
+MAX_FILE_BYTES = 256 * 2 ** 20
 
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _NON_FINITE = re.compile(r"[+-]?(?:nan|inf|infinity)", re.IGNORECASE)
@@ -176,12 +202,15 @@ class MeasuredData:
         ``key: value`` comments.
     comments : tuple of str
         Every comment line, without the leading ``#`` and surrounding blanks.
+    warnings : tuple of str
+        Doubts about data that may still be real (e.g. a low largest pressure).
     """
 
     path: str
     curves: tuple
     metadata: dict = field(default_factory=dict)
     comments: tuple = ()
+    warnings: tuple = ()
 
     @property
     def probes(self) -> tuple:
@@ -219,10 +248,18 @@ def _show(value, limit: int = 40) -> str:
 
 def _read_text(path) -> str:
     try:
+        size = os.path.getsize(path)
+        if size > MAX_FILE_BYTES:
+            raise MeasuredDataError(path, None, None, f"the file has {size / 2 ** 20:.0f} MB; at "
+                                    f"most {MAX_FILE_BYTES // 2 ** 20} MB are read (split it)")
         with open(path, "rb") as f:
             raw = f.read()
     except OSError as e:
         raise MeasuredDataError(path, None, None, f"cannot read the file ({e.strerror or e})") from None
+    rows = raw.count(b"\n")
+    if rows > MAX_ROWS_PER_FILE:
+        raise MeasuredDataError(path, None, None, f"the file has {rows} lines; at most "
+                                f"{MAX_ROWS_PER_FILE} are read (split it)")
     try:
         return raw.decode("utf-8-sig")
     except UnicodeDecodeError as e:
@@ -333,6 +370,11 @@ def _parse(path, text: str, line_numbers=None):
             raise MeasuredDataError(path, lineno, "curve", "curve id is empty")
         key = (values["probe_mm"], curve)
         rows = groups.setdefault(key, _Rows(values["probe_mm"], curve))
+        if len(rows.lines) >= MAX_POINTS_PER_CURVE:
+            raise MeasuredDataError(
+                path, lineno, None,
+                f"the {_label(rows)} has more than {MAX_POINTS_PER_CURVE} points; a suction "
+                "curve has tens to hundreds (split replicates with a 'curve' column)")
         rows.lines.append(lineno)
         rows.pressure.append(values["pressure_mbar"])
         rows.deflection.append(values["deflection_mm"])
@@ -351,10 +393,19 @@ def _label(rows: _Rows) -> str:
     return f"{rows.probe:g} mm curve" + (f" {_show(rows.curve)}" if rows.curve else "")
 
 
-def _check_curve(path, rows: _Rows) -> None:
+def _check_curve(path, rows: _Rows) -> list:
+    """Check one curve; returns warnings (doubts about data that may be real)."""
     p, d, lines = rows.pressure, rows.deflection, rows.lines
+    warnings = []
     if len(p) < 2:
         raise MeasuredDataError(path, lines[0], None, f"the {_label(rows)} has 1 point, need >= 2")
+    # negative suction first: 0, -50, -100 also "falls", but its cause is the sign
+    k_min = int(np.argmin(p))
+    if p[k_min] < 0:
+        raise MeasuredDataError(
+            path, lines[k_min], "pressure_mbar",
+            f"pressure {p[k_min]:g} mbar is negative; give the suction as positive mbar",
+        )
     for k in range(1, len(p)):
         if p[k] == p[k - 1]:
             raise MeasuredDataError(
@@ -372,12 +423,6 @@ def _check_curve(path, rows: _Rows) -> None:
                 f"pressures must increase within the {_label(rows)}{hint}",
             )
     # unit rules
-    k_min = int(np.argmin(p))
-    if p[k_min] < 0:
-        raise MeasuredDataError(
-            path, lines[k_min], "pressure_mbar",
-            f"pressure {p[k_min]:g} mbar is negative; give the suction as positive mbar",
-        )
     k_max = int(np.argmax(p))
     p_max = p[k_max]
     if p_max > PA_ABOVE_MBAR:
@@ -396,17 +441,27 @@ def _check_curve(path, rows: _Rows) -> None:
             f"largest pressure {p_max:g} mbar looks like bar or kPa, not mbar "
             "(100 mbar = 0.1 bar = 10 kPa)",
         )
+    if p_max <= LOW_PRESSURE_MBAR:
+        warnings.append(f"{path}: the {_label(rows)} reaches only {p_max:g} mbar (suction "
+                        "protocols apply 50-500 mbar): if the file is in kPa, multiply by 10")
     a = np.abs(d)
     k_big = int(np.argmax(a))
-    if a[k_big] > UM_ABOVE_MM:
+    top, floor = APERTURE_LIMIT * rows.probe, APERTURE_FLOOR * rows.probe
+    if a[k_big] > min(top, UM_ABOVE_MM):
         raise MeasuredDataError(
             path, lines[k_big], "deflection_mm",
-            f"largest deflection {d[k_big]:g} mm looks like µm, not mm (1 mm = 1000 µm)",
+            f"largest deflection {d[k_big]:g} mm looks like µm, not mm (1 mm = 1000 µm; a dome "
+            f"cannot rise beyond the {rows.probe:g} mm aperture; or is the probe wrong?)",
         )
-    if 0 < a[k_big] < M_BELOW_MM:
+    if a[k_big] == 0:
         raise MeasuredDataError(
             path, lines[k_big], "deflection_mm",
-            f"largest deflection {d[k_big]:g} mm looks like metres, not mm (1 m = 1000 mm)",
+            f"deflections of the {_label(rows)} are all 0: no dome was measured")
+    if a[k_big] < max(floor, M_BELOW_MM):
+        raise MeasuredDataError(
+            path, lines[k_big], "deflection_mm",
+            f"largest deflection {d[k_big]:g} mm looks like metres, not mm (1 m = 1000 mm; a "
+            f"dome under the {rows.probe:g} mm aperture rises by more than {floor * 1e3:g} µm)",
         )
     if max(d) <= 0 and min(d) < 0:
         raise MeasuredDataError(
@@ -414,6 +469,30 @@ def _check_curve(path, rows: _Rows) -> None:
             f"deflections of the {_label(rows)} are negative; "
             "give them positive into the aperture",
         )
+    _check_shape(path, rows)
+    return warnings
+
+
+def _check_shape(path, rows: _Rows) -> None:
+    """The curve must start at 0 and rise with the pressure (within noise)."""
+    p, d, lines = np.asarray(rows.pressure), np.asarray(rows.deflection), rows.lines
+    span = float(d.max() - min(d.min(), 0.0))
+    if p[0] == 0 and abs(d[0]) > max(0.1 * np.abs(d).max(), 0.01):
+        raise MeasuredDataError(
+            path, lines[0], "deflection_mm",
+            f"deflection {d[0]:g} mm at 0 mbar: the curve must be zeroed at 0 mbar (the "
+            "instrument zeroes there); subtract it from the curve")
+    # the largest fall below an earlier deflection: noise gives small ones, a curve that
+    # falls (wrong sign of the pressure, columns swapped) large ones
+    running = np.maximum.accumulate(d)
+    drop = running - d
+    k = int(np.argmax(drop))
+    if drop[k] > max(0.25 * span, 0.02) or np.polyfit(p, d, 1)[0] <= 0:
+        j = int(np.argmax(d[:k + 1])) if drop[k] > 0 else 0
+        raise MeasuredDataError(
+            path, lines[k], "deflection_mm",
+            f"the deflection falls with the pressure, from {d[j]:g} mm at {p[j]:g} mbar to "
+            f"{d[k]:g} mm at {p[k]:g} mbar; it must grow (columns swapped?)")
 
 
 def _check_space(path, rows: _Rows, available_probes, pressure_range, range_note=None) -> None:
@@ -473,8 +552,9 @@ def _load_text(path, text, line_numbers, available_probes=None, pressure_range_m
                range_note=None, metadata=None) -> MeasuredData:
     _, groups, comments, file_metadata = _parse(path, text, line_numbers)
     metadata = {**file_metadata, **(metadata or {})}
+    warnings = []
     for rows in groups.values():
-        _check_curve(path, rows)
+        warnings += _check_curve(path, rows)
     for rows in groups.values():
         _check_space(path, rows, available_probes, pressure_range_mbar, range_note)
     curves = tuple(
@@ -487,7 +567,7 @@ def _load_text(path, text, line_numbers, available_probes=None, pressure_range_m
         )
         for rows in groups.values()
     )
-    return MeasuredData(str(path), curves, metadata, tuple(comments))
+    return MeasuredData(str(path), curves, metadata, tuple(comments), tuple(warnings))
 
 
 @dataclass(frozen=True, eq=False)

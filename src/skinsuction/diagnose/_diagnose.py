@@ -385,6 +385,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         "input": {**(source or {}), "probes_mm": [float(p) for p in probes],
                   "probes_skipped_mm": [float(p) for p in skipped],
                   "metadata": dict(getattr(data, "metadata", {}) or {}),
+                  "warnings": list(getattr(data, "warnings", ()) or ()),
                   "curves": data_info},
         "noise_um": noise.sd_um,
         "noise": {**noise.to_dict(),

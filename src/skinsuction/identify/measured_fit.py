@@ -326,6 +326,7 @@ def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_
     for c in data.curves:
         space.probe(c.probe_mm)  # every curve must have a space (the loader checks a file)
     curves = {p: _pick_curve(data, p, curve, measured_path) for p in probes_needed}
+    data_warnings = list(getattr(data, "warnings", ()))
 
     if objective == "single":
         (p,) = probes_needed
@@ -352,7 +353,7 @@ def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_
     best = int(np.argmin(rep.E))
     runs_mpa = obj.to_moduli(rep.estimates)
     q25, q75 = np.percentile(runs_mpa, [25, 75], axis=0)
-    warnings = []
+    warnings = data_warnings
     scale_free = any(hasattr(s, "interpolant_at") for s in spaces.values())
     # the window focusing stops near, not on, the minimum of a flat valley or of a
     # bound: a bounded least-squares polish from the median finishes the job (and
