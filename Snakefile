@@ -12,9 +12,6 @@
 #        -> whole studies: every curve identified with intervals and diagnosed
 
 
-configfile: "config/config.yaml"
-
-
 include: "workflow/rules/common.smk"
 include: "workflow/rules/simulate.smk"
 include: "workflow/rules/space.smk"

@@ -123,6 +123,9 @@ def test_simulate_stopped_early_exits_3_and_still_writes(monkeypatch, capsys, tm
     (["--probe", "6", "--x1d", "abc", "--x1h", "1e-4"], "--x1d"),
     (["--probe", "6", "--x1d", "0.08", "--x1h", "1e-4", "--bottom", "glued"], "--bottom"),
     (["--probe", "6", "--x1d", "0.08"], "--x1h"),
+    (["--probe", "6", "--x1d", "0.08", "--x1h", "1e-4", "--refinement", "50"], "--refinement"),
+    (["--probe", "6", "--x1d", "0.08", "--x1h", "1e-4", "--refinement", "1e-6"], "--refinement"),
+    (["--probe", "6", "--x1d", "0.08", "--x1h", "1e-4", "--refinement", "1.5"], "--refinement"),
 ])
 def test_simulate_bad_arguments_exit_2(argv, word, capsys, monkeypatch):
     monkeypatch.setattr("skinsuction.model.simulate", fake_simulate([]))
@@ -318,3 +321,16 @@ def test_negative_seed_is_a_usage_error(command, capsys, tmp_path):
 def test_study_of_a_missing_folder_is_a_one_line_error(capsys, tmp_path):
     code, _, err = run(["study", str(tmp_path / "nowhere"), "--out", str(tmp_path / "o")], capsys)
     assert code == 2 and "no such study folder" in err and "Traceback" not in err
+
+
+def test_simulate_writes_the_measured_format_that_identify_reads(monkeypatch, capsys, tmp_path):
+    from skinsuction.measured import load_measured
+
+    monkeypatch.setattr("skinsuction.model.simulate", fake_simulate([], converge=False))
+    target = tmp_path / "curve.csv"
+    code, _, _ = run(["simulate", "--probe", 6, "--x1d", 0.05, "--x1h", 1e-3,
+                      "--measured-format", "--out", target], capsys)
+    assert code == 3  # stopped at 40 mbar: the file holds the converged part only
+    data = load_measured(target)
+    assert data.probes == (6.0,) and data.curve(6.0).pressure_mbar[-1] == 40.0
+    assert data.metadata["x1d_mpa"] == "0.05"

@@ -113,6 +113,9 @@ BAD = [
     ("mesh_fallback", [{"wall_penalty": 0}], "mesh_fallback"),
     ("mesh_fallback", [], "mesh_fallback"),
     ("mesh_fallback", {"smoothing": 1}, "mesh_fallback"),
+    ("mesh.refinement", 1.5, "refinement"),  # above 1 the mesh subdivides: whole numbers
+    ("studies.synthetic.level", 1.0, "level"),
+    ("studies.synthetic.repeats", 0, "repeats"),
 ]
 
 
@@ -151,6 +154,36 @@ def test_workflow_stops_on_invalid_config_naming_the_key(tmp_path):
     )
     assert res.returncode != 0
     assert "Invalid configuration value for 'mesh.refinement'" in res.stdout + res.stderr
+
+
+def _workflow_copy(tmp_path):
+    for part in ("Snakefile", "workflow", "config", "src", "data"):
+        src = ROOT / part
+        if src.is_dir():
+            shutil.copytree(src, tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
+        else:
+            shutil.copy(src, tmp_path / part)
+
+
+def _dry_run(cwd, *args):
+    res = subprocess.run([sys.executable, "-m", "snakemake", "-n", *args], cwd=cwd,
+                         capture_output=True, text=True, timeout=300)
+    return res.returncode, res.stdout + res.stderr
+
+
+def test_a_target_outside_its_space_and_a_yaml_syntax_error_are_named(tmp_path):
+    _workflow_copy(tmp_path)
+    config = load("config")
+    config["identification"]["target"]["x1d"] = 5.0
+    (tmp_path / "bad.yaml").write_text(yaml.safe_dump(config))
+    code, out = _dry_run(tmp_path, "--configfile", "bad.yaml")
+    assert code != 0 and "'identification.target.x1d': 5 MPa is outside the space" in out
+    text = (tmp_path / "config" / "config.yaml").read_text().splitlines()
+    line = next(i for i, s in enumerate(text) if s.startswith("  refinement:"))
+    text[line] = "  refinement: [1"
+    (tmp_path / "config" / "config.yaml").write_text("\n".join(text) + "\n")
+    code, out = _dry_run(tmp_path)
+    assert code != 0 and f"config.yaml, line {line + 2}" in out and "not valid YAML" in out
 
 
 def _pins(lines):

@@ -510,3 +510,16 @@ def test_new_modules_examples_run():
 
     for module in (_bounds, _causes, _polish, _rays):
         assert doctest.testmod(module).failed == 0, module.__name__
+
+
+@pytest.mark.parametrize("noise_um", [None, 2.0])
+def test_a_short_curve_is_a_located_input_error(noise_um, tmp_path):
+    from skinsuction.diagnose import Settings, diagnose
+    from skinsuction.identify.measured_fit import InputError
+    from skinsuction.measured import load_measured
+
+    path = tmp_path / "short.csv"
+    path.write_text("probe_mm,pressure_mbar,deflection_mm\n6,0,0\n6,50,0.3\n6,100,0.5\n")
+    with pytest.raises(InputError) as err:
+        diagnose(load_measured(path), toy_spaces(), Settings(noise_um=noise_um))
+    assert "short.csv" in str(err.value) and "2 points above 0 mbar" in str(err.value)

@@ -101,6 +101,15 @@ def interval_text(iv: dict) -> str:
     return f"[{lo}, {hi}]"
 
 
+def refinement(text: str) -> float:
+    """argparse type: a mesh density factor in [0.25, 1] or a whole number 2..8 (the schema's)."""
+    value = positive(text)
+    if 0.25 <= value <= 1 or (value == int(value) and 2 <= value <= 8):
+        return value
+    raise argparse.ArgumentTypeError(
+        f"must be a number in [0.25, 1] or a whole number from 2 to 8, got {text}")
+
+
 def unit_interval(text: str) -> float:
     value = _number(text)
     if not 0 <= value <= 1:
@@ -143,9 +152,14 @@ def _simulate_arguments(p: argparse.ArgumentParser) -> None:
                    help="hypodermis/bone interface: fixed = restrained laterally and axially, "
                         "axial = restrained axially only, free = not restrained "
                         "(default fixed, as in the paper's identifications)")
-    p.add_argument("--refinement", type=positive, default=1.0, metavar="FACTOR",
+    p.add_argument("--refinement", type=refinement, default=1.0, metavar="FACTOR",
                    help="mesh density factor, dimensionless: 1 = reference mesh, "
-                        "2 = element sizes halved, 0.5 = doubled (default 1)")
+                        "2 = element sizes halved, 0.5 = doubled; a number in [0.25, 1] or "
+                        "a whole number 2..8 (default 1)")
+    p.add_argument("--measured-format", action="store_true",
+                   help="write the curve in the measured-CSV format (columns probe_mm, "
+                        "pressure_mbar, deflection_mm), which identify, diagnose and study "
+                        "read; the '#' lines are the same")
     p.add_argument("--out", metavar="FILE",
                    help="write the CSV to FILE (atomically) instead of standard output")
 
@@ -170,9 +184,15 @@ def _curve_csv(curve, args) -> str:
         f"# newton_iterations: {int(curve.newton_iterations or 0)}",
         f"# dofs: {int(curve.dofs or 0)}",
         f"# seconds: {float(curve.seconds or 0.0):.3f}",
-        "pressure_mbar,deflection_mm",
     ]
-    lines += [f"{_fmt(p)},{_fmt(m)}" for p, m in zip(curve.pressure_mbar, curve.deflection_mm)]
+    rows = zip(curve.pressure_mbar, curve.deflection_mm)
+    if getattr(args, "measured_format", False):
+        # a measured file has no NaN rows: the curve stops where the solver stopped
+        lines.append("probe_mm,pressure_mbar,deflection_mm")
+        lines += [f"{_fmt(args.probe)},{_fmt(p)},{_fmt(m)}" for p, m in rows if m == m]
+    else:
+        lines.append("pressure_mbar,deflection_mm")
+        lines += [f"{_fmt(p)},{_fmt(m)}" for p, m in rows]
     return "\n".join(lines) + "\n"
 
 

@@ -25,8 +25,29 @@ from skinsuction.space import POINT_ID_PATTERN, expand_axis, grid_points, point_
 
 
 # ---------------------------------------------------------------- configuration
+def _check_yaml(path):
+    """A YAML syntax error of a config file, with its file, line and column."""
+    import yaml
+
+    try:
+        yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except yaml.YAMLError as err:
+        mark = getattr(err, "problem_mark", None)
+        where = f", line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(err, "problem", None) or str(err)
+        raise WorkflowError(f"{path}{where}: not valid YAML ({' '.join(str(problem).split())})")
+
+
 def _config_error(key, err):
     return WorkflowError(f"Invalid configuration value for '{key}': {err}")
+
+
+# the default config is read here, after a syntax check that names the line (Snakemake's
+# own message names neither file nor line); a --configfile is read by Snakemake first
+_check_yaml(Path(workflow.basedir) / "config" / "config.yaml")
+
+
+configfile: "config/config.yaml"
 
 
 try:

@@ -31,6 +31,15 @@ try:
 except ValueError as err:
     raise _config_error("identification", err)
 
+for _axis in ("x1d", "x1h"):
+    _values = [p[_axis] for p in grid_points(config["spaces"][ID["space"]])]
+    if not min(_values) <= ID["target"][_axis] <= max(_values):
+        raise _config_error(
+            f"identification.target.{_axis}",
+            f"{ID['target'][_axis]:g} MPa is outside the space {ID['space']!r} "
+            f"({min(_values):g}..{max(_values):g} MPa)",
+        )
+
 ID_SPACE = f"results/simulated_space/{ID['space']}.parquet"
 ID_TEST_POINTS = [
     point_id(

@@ -60,6 +60,9 @@ __all__ = ["BeyondSpaceError", "BEYOND_SPACE", "Settings", "diagnose", "diagnose
 #: Cause and verdict where the best fit sits at an edge of the simulated space.
 BEYOND_SPACE = "beyond_space"
 
+#: Fewest points above 0 mbar per probe that a diagnosis accepts.
+MIN_POINTS = 8
+
 #: Where the workflow writes the ray spaces (``--space-dir`` default).
 DEFAULT_SPACE_DIR = "results/simulated_space/scale_free"
 
@@ -169,7 +172,14 @@ def prepare_data(data, probes, settings: Settings):
         info[f"{probe:g}"] = {"curves": [c.curve for c in curves], "replicates": len(curves),
                               "averaged": bool(aligned), "points_fitted": int(p.size)}
     if not fitted:
-        raise ValueError("no curve of a probe the spaces cover")
+        raise InputError(f"{data.path}: no curve of a probe the spaces cover")
+    need = max(MIN_POINTS, settings.degree + 3)
+    for probe, (p, *_rest) in fitted.items():
+        if p.size < need:
+            raise InputError(
+                f"{data.path}: the {probe:g} mm curve has {p.size} points above 0 mbar; the "
+                f"diagnosis needs at least {need} (the smooth-pattern test fits "
+                f"{settings.degree + 1} Legendre terms per probe and the noise needs differences)")
     if settings.noise_um is not None:
         noise = NoiseEstimate(float(settings.noise_um), "given", math.inf, {})
     elif groups:
