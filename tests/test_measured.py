@@ -282,4 +282,44 @@ def test_a_huge_file_fails_fast_with_a_located_error(tmp_path):
             f.write(f"6,{k * 0.01:.2f},{k * 1e-5:.5f}\n")
     with pytest.raises(MeasuredDataError) as err:
         load_measured(path)
-    assert "more than 10000 points" in str(err.value) and "line 10002" in str(err.value)
+    assert "more than 2000 points" in str(err.value) and "line 2002" in str(err.value)
+
+
+def test_a_million_rows_load_in_bounded_memory_or_fail_fast(tmp_path):
+    """1e6 rows under a 3 GB address-space cap: as one curve it fails at its 2001st point;
+    as 500 replicate curves of 2000 points it loads (issue: 24 GB RSS before)."""
+    import subprocess
+    import sys
+
+    one, many = tmp_path / "one.csv", tmp_path / "many.csv"
+    p = np.tile(np.arange(2000) * 0.05, 500)
+    m = p * 0.006
+    with open(one, "w") as f:
+        f.write("probe_mm,pressure_mbar,deflection_mm\n")
+        f.writelines(f"6,{k * 1e-4:.4f},{k * 6e-7:.7f}\n" for k in range(1_000_000))
+    with open(many, "w") as f:
+        f.write("probe_mm,pressure_mbar,deflection_mm,curve\n")
+        f.writelines(f"6,{a:.2f},{b:.4f},R{k // 2000}\n" for k, (a, b) in enumerate(zip(p, m)))
+    code = (
+        "import resource, sys, time\n"
+        "resource.setrlimit(resource.RLIMIT_AS, (3 * 2**30, 3 * 2**30))\n"
+        "from skinsuction.measured import load_measured, MeasuredDataError\n"
+        "t = time.perf_counter()\n"
+        "try:\n"
+        "    d = load_measured(sys.argv[1]); print('loaded', len(d.curves))\n"
+        "except MeasuredDataError as e:\n"
+        "    print('error', e)\n"
+        "print('seconds', time.perf_counter() - t)\n"
+        "print('maxrss_mb', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)\n"
+    )
+    out = {}
+    for path in (one, many):
+        res = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True,
+                             text=True, timeout=300)
+        assert res.returncode == 0, res.stderr[-2000:]
+        out[path.name] = res.stdout
+    assert "error" in out["one.csv"] and "more than 2000 points" in out["one.csv"]
+    assert "line 2002" in out["one.csv"]
+    assert "loaded 500" in out["many.csv"]
+    rss = float(out["many.csv"].split("maxrss_mb")[1])
+    assert rss < 3 * 1024

@@ -60,7 +60,7 @@ Unit and plausibility rules, per curve (a Cutometer applies at most about
   curve's span and 0.02 mm, or a falling trend: it must grow with the pressure
   (noise makes only small falls).
 
-Sizes: at most 10 000 points per curve, 2 000 000 lines and 256 MB per file, so
+Sizes: at most 2 000 points per curve, 2 000 000 lines and 256 MB per file, so
 that a wrong file fails fast instead of filling the memory.
 
 Examples
@@ -122,7 +122,7 @@ APERTURE_FLOOR = 1e-3
 LOW_PRESSURE_MBAR = 20.0
 #: Points per curve and rows per file: beyond them a file is refused before it
 #: fills the memory (a Cutometer curve has tens to hundreds of points).
-MAX_POINTS_PER_CURVE = 10_000
+MAX_POINTS_PER_CURVE = 2_000
 MAX_ROWS_PER_FILE = 2_000_000
 MAX_FILE_BYTES = 256 * 2 ** 20
 

@@ -81,8 +81,9 @@ POINTS_PER_AXIS = {1: 401, 2: 81, 3: 31}
 BOX_HALF_WIDTH_SE = 4.0
 #: Fewest cells the region must span along each axis before the box is shrunk.
 MIN_CELLS = 8
-#: Candidates per vectorised call (bounds the memory of a call).
-CHUNK = 8192
+#: Curve values per vectorised call (candidates x points; 32 MB of float64): bounds
+#: the memory of a call whatever the length of the curve.
+CHUNK_VALUES = 4_000_000
 
 
 @dataclass(frozen=True)
@@ -161,13 +162,14 @@ def _misfit_scale(chi2_min, dof, noise_dof, alpha=0.01) -> float:
     return float(ratio) if ratio > crit else 1.0
 
 
-def _chi2(residuals, theta):
+def _chi2(residuals, theta, n_points):
     out = np.empty(theta.shape[0])
-    for i in range(0, theta.shape[0], CHUNK):
-        r = np.asarray(residuals(theta[i:i + CHUNK]), dtype=float)
+    chunk = max(16, CHUNK_VALUES // max(n_points, 1))
+    for i in range(0, theta.shape[0], chunk):
+        r = np.asarray(residuals(theta[i:i + chunk]), dtype=float)
         c = np.einsum("nt,nt->n", r, r)
         c[~np.isfinite(c)] = np.inf
-        out[i:i + CHUNK] = c
+        out[i:i + chunk] = c
     return out
 
 
@@ -276,7 +278,7 @@ def profile_intervals(residuals, theta_hat, lower, upper, parameters: dict, *,
     for _ in range(max_rounds):
         box_hi = np.maximum(box_hi, box_lo + tiny)
         axes, pts = _grid(box_lo, box_hi, m)
-        chi2 = _chi2(residuals, pts)
+        chi2 = _chi2(residuals, pts, n)
         total += pts.shape[0]
         chi2_min = min(chi2_hat, float(chi2.min()))
         if not math.isfinite(chi2_min):
