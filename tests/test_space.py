@@ -13,6 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from skinsuction.model import ParameterError
 from skinsuction import provenance, space
 from skinsuction.space import (
     COLUMNS,
@@ -341,7 +342,7 @@ def stand_in_model(monkeypatch):
         return Curve(c.pressure_mbar, c.deflection_mm, True, c.last_converged_mbar, dofs=10)
 
     fake = types.ModuleType("skinsuction.model")
-    fake.Curve, fake.simulate = Curve, simulate
+    fake.Curve, fake.simulate, fake.ParameterError = Curve, simulate, ParameterError
     monkeypatch.setitem(sys.modules, "skinsuction.model", fake)
     return calls
 
@@ -381,7 +382,7 @@ def stopping_model(monkeypatch):
         return stand_in_curve(params, pressures_mbar, stops[key])
 
     fake = types.ModuleType("skinsuction.model")
-    fake.Curve, fake.simulate = StandInCurve, simulate
+    fake.Curve, fake.simulate, fake.ParameterError = StandInCurve, simulate, ParameterError
     monkeypatch.setitem(sys.modules, "skinsuction.model", fake)
     return calls, stops
 
@@ -453,7 +454,7 @@ def test_splice_keeps_the_first_solve_and_joins_the_fallback_continuously(monkey
         return stand_in_curve(params, pressures_mbar, 40.0)
 
     fake = types.ModuleType("skinsuction.model")
-    fake.Curve, fake.simulate = StandInCurve, simulate
+    fake.Curve, fake.simulate, fake.ParameterError = StandInCurve, simulate, ParameterError
     monkeypatch.setitem(sys.modules, "skinsuction.model", fake)
     p = np.asarray(PRESSURES)
     params = dict(x1d=0.01, x1h=1e-4, probe_mm=6.0)
@@ -506,3 +507,12 @@ def test_flat_public_api():
     assert {"simulate", "Curve", "read_space", "plot_fig3"} <= set(dir(skinsuction))
     with pytest.raises(AttributeError):
         skinsuction.no_such_name
+
+
+def test_parameters_the_model_refuses_fail_the_job_loudly(tmp_path):
+    # refinement 1.5 passed an older schema; every FE job then "succeeded" with no curve
+    from skinsuction.space import solve_with_fallbacks
+
+    with pytest.raises(ParameterError, match="refinement above 1 must be a whole number"):
+        solve_with_fallbacks(dict(x1d=0.05, x1h=1e-3, probe_mm=6.0, bottom="fixed"),
+                             [0.0, 10.0], {"refinement": 1.5}, None, label="p6 test")

@@ -431,7 +431,9 @@ def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None,
     The chain of :func:`compute_point`, for any model keywords (``params`` are
     passed to :func:`skinsuction.model.simulate`, e.g. with ``prestretch``).
     An exception of the model is logged and returned as a failed curve (all
-    NaN, ``reason="exception: ..."``), never raised.
+    NaN, ``reason="exception: ..."``), never raised, except
+    :class:`skinsuction.model.ParameterError` (parameters or mesh settings the
+    model refuses), which is raised: a workflow job fails loudly.
 
     ``splice=True`` keeps the first solve's curve up to where it converged and
     takes only the rest from the fallback, scaled to meet it there (``info``
@@ -452,7 +454,7 @@ def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None,
     import dataclasses
     import time
 
-    from skinsuction.model import Curve, simulate
+    from skinsuction.model import Curve, ParameterError, simulate
 
     pressures = np.asarray(pressures_mbar, dtype=float)
 
@@ -462,6 +464,11 @@ def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None,
         try:
             extra = {} if budget is None else {"iteration_budget": budget}
             curve = simulate(**params, pressures_mbar=pressures, mesh=settings, **extra)
+        except ParameterError as err:
+            # refused parameters or mesh settings are the configuration's error, not a
+            # non-converged point: the job fails, loudly, naming them
+            raise ParameterError(f"{label}: the model refuses {params} with mesh "
+                                 f"{settings}: {err}") from None
         except Exception as err:  # the model promises not to raise; record it if it does
             log.exception("the model raised at %s", label)
             curve = Curve(

@@ -1,6 +1,6 @@
 """The forward model of the suction test (axisymmetric, two layers, finite strain)."""
 
-from ._curve import Curve
+from ._curve import Curve, ParameterError
 from ._geometry import MeshSettings, edge_fan, suction_mesh
 from ._material import SkinLayers, bulk_modulus, prestress, thickness_stretch
 from ._simulate import BOTTOM_CONDITIONS, SuctionTest, simulate
@@ -9,6 +9,7 @@ __all__ = [
     "BOTTOM_CONDITIONS",
     "Curve",
     "MeshSettings",
+    "ParameterError",
     "SkinLayers",
     "SuctionTest",
     "bulk_modulus",

@@ -49,3 +49,11 @@ class Curve:
         return pd.DataFrame(
             {"pressure_mbar": self.pressure_mbar, "deflection_mm": self.deflection_mm}
         )
+
+
+class ParameterError(ValueError):
+    """The model refuses its parameters or mesh settings (before any solve).
+
+    A failed solve is a :class:`Curve` with ``converged=False``; refused
+    parameters are a user's error, raised so that a workflow job fails loudly.
+    """

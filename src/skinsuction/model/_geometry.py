@@ -5,6 +5,8 @@ from dataclasses import asdict, dataclass
 import felupe as fem
 import numpy as np
 
+from ._curve import ParameterError
+
 
 @dataclass(frozen=True)
 class MeshSettings:
@@ -83,7 +85,7 @@ class MeshSettings:
         known = cls.__dataclass_fields__
         unknown = sorted(set(settings) - set(known))
         if unknown:
-            raise ValueError(
+            raise ParameterError(
                 f"unknown mesh setting(s) {unknown}; known: {sorted(known)}"
             )
         return cls(**settings)
@@ -126,7 +128,7 @@ def subdivide(x, parts):
     [0.0, 0.5, 1.0, 2.0, 3.0]
     """
     if parts != int(parts):
-        raise ValueError(f"a refinement above 1 must be a whole number, not {parts!r}")
+        raise ParameterError(f"a refinement above 1 must be a whole number, not {parts!r}")
     parts = int(parts)
     t = np.arange(parts) / parts
     inner = (x[:-1, None] + np.diff(x)[:, None] * t).ravel()
@@ -197,13 +199,13 @@ def suction_mesh(probe_mm, t_d, t_h, settings=MeshSettings()):
         Per cell, True in the dermis.
     """
     if settings.element not in ("quad8", "quad9"):
-        raise ValueError(f"mesh element must be 'quad8' or 'quad9', not {settings.element!r}")
+        raise ParameterError(f"mesh element must be 'quad8' or 'quad9', not {settings.element!r}")
     if settings.corner == "fan":
         mesh = _fan_mesh(probe_mm, t_d, t_h, settings)
     elif settings.corner == "grid":
         mesh = _grid_mesh(probe_mm, t_d, t_h, settings)
     else:
-        raise ValueError(f"mesh corner must be 'fan' or 'grid', not {settings.corner!r}")
+        raise ParameterError(f"mesh corner must be 'fan' or 'grid', not {settings.corner!r}")
     mesh = mesh.add_midpoints_edges()
     if settings.element == "quad9":
         mesh = mesh.add_midpoints_faces()
@@ -224,7 +226,7 @@ def _sizes(probe_mm, t_d, t_h, settings):
 
 def _fan_mesh(probe_mm, t_d, t_h, settings):
     if settings.edge_radius > 0:
-        raise ValueError("a rounded probe edge (edge_radius > 0) needs mesh corner 'grid'")
+        raise ParameterError("a rounded probe edge (edge_radius > 0) needs mesh corner 'grid'")
     s = _sizes(probe_mm, t_d, t_h, settings)
     a, g = s["a"], settings.growth
     size = min(settings.fan_size * a, 0.5 * t_d)

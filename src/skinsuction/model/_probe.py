@@ -4,6 +4,8 @@ rounded edge where it meets the glued face."""
 import felupe as fem
 import numpy as np
 
+from ._curve import ParameterError
+
 
 class ProbeEdge(fem.mechanics.ContactRigidBase):
     r"""Frictionless penalty contact of skin points with the rigid probe.
@@ -46,7 +48,7 @@ class ProbeEdge(fem.mechanics.ContactRigidBase):
 
     def __init__(self, field, points, centerpoint, edge_radius, **kwargs):
         if not edge_radius > 0:
-            raise ValueError(f"edge_radius must be positive, not {edge_radius!r}")
+            raise ParameterError(f"edge_radius must be positive, not {edge_radius!r}")
         self.edge_radius = float(edge_radius)
         super().__init__(field, points, centerpoint, **kwargs)
 

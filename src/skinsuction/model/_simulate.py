@@ -6,7 +6,7 @@ import felupe as fem
 import numpy as np
 from scipy.sparse.linalg import splu
 
-from ._curve import Curve
+from ._curve import Curve, ParameterError
 from ._geometry import MeshSettings, suction_mesh
 from ._material import SkinLayers, bulk_modulus, thickness_stretch
 from ._probe import ProbeEdge
@@ -73,15 +73,15 @@ class SuctionTest:
         prestretch=1.0,
     ):
         if bottom not in BOTTOM_CONDITIONS:
-            raise ValueError(f"bottom must be one of {BOTTOM_CONDITIONS}, not {bottom!r}")
+            raise ParameterError(f"bottom must be one of {BOTTOM_CONDITIONS}, not {bottom!r}")
         for name, value in dict(x1d=x1d, x1h=x1h, t_d=t_d, t_h=t_h, probe_mm=probe_mm).items():
             if not value > 0:
-                raise ValueError(f"{name} must be positive, not {value!r}")
+                raise ParameterError(f"{name} must be positive, not {value!r}")
         if not 0.5 <= prestretch <= 2.0:
-            raise ValueError(f"prestretch must be within [0.5, 2], not {prestretch!r}")
+            raise ParameterError(f"prestretch must be within [0.5, 2], not {prestretch!r}")
         for name, value in dict(x2d=x2d, x2h=x2h).items():
             if not value >= 0:
-                raise ValueError(f"{name} must be non-negative, not {value!r}")
+                raise ParameterError(f"{name} must be non-negative, not {value!r}")
         if not isinstance(mesh, MeshSettings):
             mesh = MeshSettings.from_dict(mesh)
 
@@ -115,7 +115,7 @@ class SuctionTest:
         F0 = None
         if prestretch != 1.0:
             if mesh.formulation == "mixed":
-                raise ValueError("prestretch needs the displacement formulation")
+                raise ParameterError("prestretch needs the displacement formulation")
             # the mesh is the pre-stretched skin (thicknesses as measured in vivo);
             # each layer contracts through its thickness so the surface is free
             axial = np.where(
@@ -294,7 +294,7 @@ class SuctionTest:
             else np.asarray(pressures_mbar, dtype=float)
         )
         if p_out[0] != 0 or np.any(np.diff(p_out) <= 0):
-            raise ValueError("pressures must start at 0 and increase strictly")
+            raise ParameterError("pressures must start at 0 and increase strictly")
         deflection = np.full(p_out.shape, np.nan)
         deflection[0] = 0.0
 
