@@ -86,7 +86,7 @@ def main(argv=None):
     seeds = list(range(args.first_seed, args.first_seed + args.draws))
     clean = clean_curves(seeds, Path(args.cache), mesh, fallback)
 
-    rows, skipped = [], 0
+    rows, skipped, failures = [], 0, []
     t0 = time.process_time()
     for s in seeds:
         x1d, x1h, noise = draw(s)
@@ -101,8 +101,15 @@ def main(argv=None):
             curves.append(MeasuredCurve(probe, PRESSURES, m))
         data = MeasuredData(f"draw {s}", tuple(curves))
         for name, kw in PROBE_SETS.items():
-            r = identify_data(data, space, repeats=args.repeats, seed=s, **kw)
+            try:
+                r = identify_data(data, space, repeats=args.repeats, seed=s, **kw)
+            except ValueError as err:  # e.g. beyond the reach of the space
+                failures.append((s, name, str(err)[:160]))
+                continue
             iv = r["intervals"]
+            if not iv:
+                failures.append((s, name, "; ".join(r["warnings"])[:160]))
+                continue
             for par, truth in (("X1d", x1d), ("X1h", x1h)):
                 i = iv[par]
                 rows.append({"set": name, "parameter": par, "seed": s,
@@ -116,7 +123,10 @@ def main(argv=None):
     df = pd.DataFrame(rows)
     n = df.groupby(["set", "parameter"]).size()
     print(f"\n{len(seeds) - skipped} draws ({skipped} skipped: FE run stopped), "
-          f"{cpu / max(1, len(df) // 2):.3f} s CPU per identification with intervals\n")
+          f"{cpu / max(1, len(df) // 2):.3f} s CPU per identification with intervals, "
+          f"{len(failures)} identifications without intervals\n")
+    for f in failures:
+        print("  no interval:", *f)
     print("| probe set | parameter | coverage | binomial 95 % range at 95 % | "
           "median relative width | open at an edge | misfit-scaled |")
     print("|---|---|---|---|---|---|---|")

@@ -123,6 +123,10 @@ class Curve:  # the fields of skinsuction.model.Curve
     info: dict = field(default_factory=dict)
 
 
+class ParameterError(ValueError):
+    pass
+
+
 def simulate(x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, probe_mm=6.0, bottom="fixed",
              pressures_mbar=None, mesh=None):
     p = np.arange(0, 101, 2.0) if pressures_mbar is None else np.asarray(pressures_mbar, float)

@@ -306,6 +306,12 @@ def atomic_output(path):
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp{path.suffix}")
+    # a writer killed before its move (SIGKILL, power cut) leaves its temporary file:
+    # the next writer of the same output removes it (one job writes an output)
+    for stale in path.parent.glob(f".{path.name}.*.tmp{path.suffix}"):
+        if stale != tmp:
+            with contextlib.suppress(FileNotFoundError):
+                stale.unlink()
     try:
         yield tmp
         os.replace(tmp, path)
@@ -560,9 +566,24 @@ def compute_point(
     return curve
 
 
+class CorruptCurveError(ValueError):
+    """A curve file cannot be read (truncated or overwritten): its name and the remedy."""
+
+
 def read_curve(path) -> tuple[pd.DataFrame, dict]:
-    """Rows and metadata of one curve file written by :func:`write_curve`."""
-    return _read_parquet(path)
+    """Rows and metadata of one curve file written by :func:`write_curve`.
+
+    A file that cannot be read (truncated by a full disk or a copy, overwritten)
+    raises :class:`CorruptCurveError` naming it: curve files are written
+    atomically, so a killed job never leaves one; delete it and rerun.
+    """
+    try:
+        return _read_parquet(path)
+    except (OSError, ValueError) as err:  # pyarrow: ArrowInvalid is a ValueError
+        raise CorruptCurveError(
+            f"{path}: unreadable curve file ({type(err).__name__}: "
+            f"{' '.join(str(err).split())[:160]}); delete it and rerun the workflow "
+            "to recompute it") from None
 
 
 def read_curves(paths) -> tuple[pd.DataFrame, dict]:
