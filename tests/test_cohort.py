@@ -125,9 +125,15 @@ def test_study_diagnoses_each_measurement_in_parallel_with_the_same_result(tmp_p
     out = {}
     for workers in (1, 2):
         run_study(path, tmp_path / f"w{workers}", space=space, ray_spaces=rays, diagnose=True,
-                  repeats=1, seed=0, workers=workers, progress=False,
+                  repeats=1, seed=0, workers=workers, progress=False, reports=workers == 1,
                   diagnosis_settings={"window_focusing": {"n_samples": 300}})
         out[workers] = pd.read_parquet(tmp_path / f"w{workers}" / "curves.parquet")
+    # the optional per-measurement reports: identification and diagnosis of each
+    reports = sorted((tmp_path / "w1" / "reports").iterdir())
+    assert len(reports) == 4
+    assert (reports[0] / "identification" / "identification.json").exists()
+    assert (reports[0] / "diagnosis" / "report.json").exists()
+    assert not (tmp_path / "w2" / "reports").exists()
     a, b = out[1], out[2]
     assert a["cause"].notna().sum() == 4
     pd.testing.assert_series_equal(a["x1d_mpa"], b["x1d_mpa"])
