@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from skinsuction.figures import _style
-from skinsuction.figures.fit import PROBE_COLOR, interval_lines
+from skinsuction.figures.fit import PROBE_COLOR, TEXT_BOX, interval_lines
 #: Line style of the models.
 MODEL_STYLE = {"baseline": {"linestyle": "--", "color": "0.35"},
                "extended": {"linestyle": "-", "color": "#2e933c"}}
@@ -75,9 +75,9 @@ def plot_fit(report: dict, title: str | None = None):
         fit_ci = (chosen or {}).get("intervals") or report["baseline"].get("intervals")
         if fit_ci and "error" not in fit_ci:
             names = [k for k in fit_ci if k in UNIT or k == "lambda0"]
-            axes[0][-1].text(0.98, 0.04, interval_lines(fit_ci, names, {**UNIT, "lambda0": ""}),
-                             transform=axes[0][-1].transAxes, ha="right", va="bottom",
-                             fontsize=6.5)
+            axes[0][-1].text(0.98, 0.3, interval_lines(fit_ci, names, {**UNIT, "lambda0": ""}),
+                             transform=axes[0][-1].transAxes, ha="right", va="center",
+                             fontsize=6.5, bbox=TEXT_BOX)
         fig.suptitle(title or f"cause: {report['cause']}", fontsize=9)
         fig.tight_layout()
     return fig

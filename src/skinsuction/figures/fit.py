@@ -21,6 +21,9 @@ from skinsuction.figures import _style
 
 #: Colour per probe diameter (mm, as text).
 PROBE_COLOR = {"6": "#1b6ca8", "2": "#d1495b"}
+#: Box behind text over curves (legible wherever the curves run).
+TEXT_BOX = {"boxstyle": "round,pad=0.3", "facecolor": "white", "alpha": 0.85,
+            "edgecolor": "0.8"}
 
 
 def _arr(values):
@@ -82,7 +85,7 @@ def plot_fit(result: dict):
             f"E = {e_txt}", fontsize=8)
         iv = result.get("intervals")
         if iv:
-            top.text(0.98, 0.04, interval_lines(iv, ("X1d", "X1h")), transform=top.transAxes,
-                     ha="right", va="bottom", fontsize=7)
+            top.text(0.98, 0.3, interval_lines(iv, ("X1d", "X1h")), transform=top.transAxes,
+                     ha="right", va="center", fontsize=7, bbox=TEXT_BOX)
         fig.tight_layout()
     return fig
