@@ -25,6 +25,19 @@ __all__ = ["plot_distributions", "plot_paired", "plot_causes", "write_study_figu
 GROUP_COLORS = ["#1b6ca8", "#d1495b", "#2e933c", "#edae49", "#6c4f77", "0.4"]
 
 
+def _plain(minor=False):
+    """Tick labels 0.01, 0.02, ... on a log axis (minor ticks: 2, 3, 5 only)."""
+    from matplotlib.ticker import FuncFormatter
+
+    def fmt(x, _):
+        lead = round(x / 10 ** np.floor(np.log10(x)), 6)
+        if minor and lead not in (2, 3, 5):
+            return ""
+        return f"{x:g}"
+
+    return FuncFormatter(fmt)
+
+
 def _groups(df):
     return sorted(df["group"].astype(str).unique()) if "group" in df.columns else ["all"]
 
@@ -61,6 +74,8 @@ def plot_distributions(df, parameter: str = "x1d_mpa", label: str = "$X_1^d$ (MP
         ax.set_xticklabels(["\n".join(f"{v}" for v in (key if isinstance(key, tuple) else (key,)))
                             for key, _ in cells], fontsize=7)
         ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(_plain())
+        ax.yaxis.set_minor_formatter(_plain(minor=True))
         ax.set_ylabel(label)
         ax.set_title("estimates with 95 % intervals; bar: median", fontsize=8)
         fig.tight_layout()
@@ -87,14 +102,23 @@ def plot_paired(df, parameter: str = "x1d_mpa", label: str = "$X_1^d$ (MPa)"):
                 y = [r.get(v, np.nan) for v in visits]
                 ax.plot(range(len(visits)), y, "-o", color=color, alpha=0.6, markersize=3,
                         linewidth=0.8)
-            if len(wide):
-                med = [np.nanmedian(wide[v]) if v in wide.columns else np.nan for v in visits]
-                ax.plot(range(len(visits)), med, "-", color="0.1", linewidth=2, label="median")
+            pairs = wide.dropna(subset=[v for v in visits if v in wide.columns]) \
+                if set(visits) <= set(wide.columns) else wide.iloc[0:0]
+            if len(pairs) and len(visits) == 2:
+                # the median of the per-subject changes, from the median of the first visit
+                # (the medians of the two visits are of different subjects)
+                change = float(np.median(np.log(pairs[visits[1]] / pairs[visits[0]])))
+                start = float(np.median(pairs[visits[0]]))
+                ax.plot([0, 1], [start, start * np.exp(change)], "-", color="0.1", linewidth=2)
+                ax.text(0.5, 0.97, f"median change {100 * (np.exp(change) - 1):+.1f} %",
+                        transform=ax.transAxes, ha="center", va="top", fontsize=7)
             ax.set_xticks(range(len(visits)))
             ax.set_xticklabels([f"visit {v}" for v in visits])
             ax.set_xlim(-0.3, len(visits) - 0.7)
-            ax.set_title(f"{gname} (n = {len(wide)})", fontsize=8)
+            ax.set_title(f"{gname} ({len(pairs)} pairs)", fontsize=8)
             ax.set_yscale("log")
+            ax.yaxis.set_major_formatter(_plain())
+            ax.yaxis.set_minor_formatter(_plain(minor=True))
         axes[0][0].set_ylabel(label)
         fig.tight_layout()
     return fig
