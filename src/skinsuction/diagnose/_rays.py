@@ -918,8 +918,11 @@ class TabulatedInterpolant:
         lr = np.log10(np.asarray(space.spec.ratio_nodes))
         grid = np.stack(np.meshgrid(lx, lr, indexing="ij"), axis=-1).reshape(-1, 2)
         self._pos = self.pressure_mbar > 0
+        # in chunks: a 2000-point curve on the whole table is 1e7 values per stencil node
+        chunk = max(16, 2_000_000 // max(self.pressure_mbar.size, 1))
+        m = np.concatenate([rays(grid[i:i + chunk]) for i in range(0, grid.shape[0], chunk)])
         with np.errstate(divide="ignore", invalid="ignore"):
-            g = np.log(rays(grid)[:, self._pos])
+            g = np.log(m[:, self._pos])
         g[~np.isfinite(g)] = np.nan
         table = GriddedSpace(lx, lr, self.pressure_mbar[self._pos],
                              g.reshape(n, lr.size, -1), probe_mm)

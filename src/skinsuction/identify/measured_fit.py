@@ -534,7 +534,7 @@ def _noise_and_intervals(obj, objective, curves, data, theta, noise_um, level, w
         warnings.append(f"no intervals: the noise cannot be estimated ({err}); "
                         "give it with --noise-um")
         return None, None
-    if noise.sd_um <= 0:
+    if noise.sd_um <= 1e-6:
         warnings.append("no intervals: the estimated noise is 0 (are the deflections "
                         "rounded or synthetic?); give it with --noise-um")
         return noise.to_dict(), None
