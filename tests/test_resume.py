@@ -49,9 +49,12 @@ def _workdir(tmp_path, name):
 
 
 def _readable_curves(wd):
-    """Every visible curve file must read completely (atomic writes)."""
+    """Every curve file must read completely (atomic writes; the temporary files being
+    written are hidden, named ``.<name>.<pid>.tmp.parquet``, and never read)."""
     out = {}
     for f in (wd / "results" / "curves").glob("*.parquet"):
+        if f.name.startswith("."):
+            continue
         pq.read_table(f)  # raises on a partial file
         out[f.name] = f.stat().st_mtime_ns
     return out
