@@ -270,7 +270,7 @@ def _crossings(pts, chi2, inside, shape, limit):
 #: of the first scan of the nuisance coordinate, zoom rounds and points per round.
 PROFILE_U, PROFILE_W, ZOOM_ROUNDS, ZOOM_POINTS = 81, 61, 4, 9
 #: Bisection steps that place an end of an interval between two profile values.
-BISECTIONS = 14
+BISECTIONS = 12
 
 
 def _line_range(point, direction, lower, upper):
@@ -375,22 +375,27 @@ def _profile_2d_intervals(residuals, theta, lower, upper, parameters, G, n, chi2
         if inside.size == 0:  # the region is narrower than the scan: start at the fit
             i_hat = int(np.argmin(np.abs(us - u_hat)))
             inside = np.array([i_hat])
-        ends = []
-        for i_end, step in ((int(inside.min()), -1), (int(inside.max()), +1)):
+        # both ends at once: bisection between the last scan value inside the region
+        # (a) and the first outside (b), one vectorised profile call per step
+        ends, brackets = [None, None], {}
+        for side, (i_end, step) in enumerate(((int(inside.min()), -1),
+                                              (int(inside.max()), +1))):
             j = i_end + step
             if j < 0 or j >= us.size:  # inside up to the edge of the space
-                ends.append((thetas[i_end], True))
-                continue
-            a, b = us[i_end], us[j]  # a inside, b outside
-            theta_a = thetas[i_end]
-            for _ in range(BISECTIONS):
-                mid = 0.5 * (a + b)
-                v, t = prof(np.array([mid]))
-                if v[0] <= limit:
-                    a, theta_a = mid, t[0]
+                ends[side] = (thetas[i_end], True)
+            else:
+                brackets[side] = [us[i_end], us[j], thetas[i_end]]
+        for _ in range(BISECTIONS if brackets else 0):
+            sides = list(brackets)
+            mids = np.array([0.5 * (brackets[s][0] + brackets[s][1]) for s in sides])
+            v, t = prof(mids)
+            for s, mid, vs, ts in zip(sides, mids, v, t):
+                if vs <= limit:
+                    brackets[s][0], brackets[s][2] = mid, ts
                 else:
-                    b = mid
-            ends.append((theta_a, False))
+                    brackets[s][1] = mid
+        for s, (_, _, theta_a) in brackets.items():
+            ends[s] = (theta_a, False)
         total += prof.evaluations
         # an end is also open where its best fit sits on an edge of the space along an
         # axis the parameter depends on (X1h of a 2 mm curve stops at the ratio's end)
