@@ -156,15 +156,6 @@ def test_workflow_stops_on_invalid_config_naming_the_key(tmp_path):
     assert "Invalid configuration value for 'mesh.refinement'" in res.stdout + res.stderr
 
 
-def _workflow_copy(tmp_path):
-    for part in ("Snakefile", "workflow", "config", "src", "data"):
-        src = ROOT / part
-        if src.is_dir():
-            shutil.copytree(src, tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
-        else:
-            shutil.copy(src, tmp_path / part)
-
-
 def _dry_run(cwd, *args):
     res = subprocess.run([sys.executable, "-m", "snakemake", "-n", *args], cwd=cwd,
                          capture_output=True, text=True, timeout=300)
@@ -172,7 +163,9 @@ def _dry_run(cwd, *args):
 
 
 def test_a_target_outside_its_space_and_a_yaml_syntax_error_are_named(tmp_path):
-    _workflow_copy(tmp_path)
+    from test_workflow import copy_workflow
+
+    copy_workflow(tmp_path)
     config = load("config")
     config["identification"]["target"]["x1d"] = 5.0
     (tmp_path / "bad.yaml").write_text(yaml.safe_dump(config))

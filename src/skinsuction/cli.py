@@ -83,22 +83,27 @@ def non_negative(text: str) -> float:
     return value
 
 
-def non_negative_int(text: str) -> int:
-    """argparse type: an integer >= 0 (seeds)."""
+def _whole_number(text: str, minimum: int) -> int:
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {value}")
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {text}")
     return value
 
 
+def non_negative_int(text: str) -> int:
+    """argparse type: an integer >= 0 (seeds)."""
+    return _whole_number(text, 0)
+
+
 def interval_text(iv: dict) -> str:
-    """``[lo, hi]`` of an interval dict, ``<=`` / ``>=`` marking ends at the space's edge."""
-    lo = ("<=" if iv["lower_open"] else "") + f"{iv['lower']:.3g}"
-    hi = (">=" if iv["upper_open"] else "") + f"{iv['upper']:.3g}"
-    return f"[{lo}, {hi}]"
+    """``[lo, hi]`` of an interval of a JSON result (see ``Interval.text``)."""
+    from skinsuction.identify import Interval
+
+    return Interval(iv["estimate"], iv["lower"], iv["upper"], iv["lower_open"],
+                    iv["upper_open"]).text()
 
 
 def refinement(text: str) -> float:
@@ -118,13 +123,8 @@ def unit_interval(text: str) -> float:
 
 
 def positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {text}")
-    return value
+    """argparse type: an integer >= 1."""
+    return _whole_number(text, 1)
 
 
 def _fmt(x) -> str:
