@@ -10,7 +10,7 @@ understood, told apart by their columns:
 
 * a grid space (skinsuction.space.assemble_space): one curve per point_id;
   the points, their `converged` flags and `last_converged_mbar` must be equal;
-* a scale-free space (skinsuction.diagnose._rays.assemble_ray_space): one ray
+* a scale-free space (skinsuction.space.assemble_ray_space): one ray
   per (probe_mm, ratio, coordinate); the rays and their `converged` flags (the
   per-ray solver record in the file's metadata) must be equal.
 

@@ -39,7 +39,7 @@ _SPACES = None
 def _spaces(space_dir):
     global _SPACES
     if _SPACES is None:
-        from skinsuction.diagnose import read_ray_spaces
+        from skinsuction.space import read_ray_spaces
 
         _SPACES = read_ray_spaces(space_dir)
     return _SPACES

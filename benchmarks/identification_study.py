@@ -23,7 +23,8 @@ import time
 import numpy as np
 import pandas as pd
 
-from skinsuction.identify import analytic_surrogate_space, evaluate
+from skinsuction.identify import analytic_surrogate_space
+from skinsuction.space import evaluate
 from skinsuction.identify.study import (
     TARGET,
     StudySetup,

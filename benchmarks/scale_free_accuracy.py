@@ -31,7 +31,7 @@ _SPACES = None
 
 def _init(space_dir):
     global _SPACES
-    from skinsuction.diagnose import read_ray_spaces
+    from skinsuction.space import read_ray_spaces
 
     _SPACES = read_ray_spaces(space_dir)
 
@@ -60,7 +60,7 @@ def main(argv=None):
     ap.add_argument("--out", default="benchmarks/out/scale_free_accuracy.csv")
     args = ap.parse_args(argv)
 
-    from skinsuction.diagnose import read_ray_spaces
+    from skinsuction.space import read_ray_spaces
     from skinsuction.diagnose._accuracy import draw_points, normalised_error
 
     spaces = read_ray_spaces(args.space_dir)

@@ -69,10 +69,8 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=1)
     args = ap.parse_args(argv)
 
-    from skinsuction.diagnose import (
-        Cause, FitData, RaySpec, Settings, build_ray_spaces, diagnose_file, fit_model,
-        prepare_data, registry_from_config, virtual_experiment, write_csv,
-    )
+    from skinsuction.diagnose import Cause, FitData, Settings, diagnose_file, fit_model, prepare_data, registry_from_config, virtual_experiment, write_csv
+    from skinsuction.space import RaySpec, build_ray_spaces
     from skinsuction.measured import load_measured
 
     cfg = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())

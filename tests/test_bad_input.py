@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from skinsuction import cli
-from skinsuction.diagnose._rays import _write_parquet
+from skinsuction.space._storage import _write_parquet
 from test_diagnose import BASELINE, toy_curve, toy_spaces
 
 HEADER = "probe_mm,pressure_mbar,deflection_mm\n"

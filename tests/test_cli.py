@@ -18,7 +18,8 @@ import pandas as pd
 import pytest
 
 from skinsuction import cli
-from skinsuction.identify import analytic_surrogate_space, evaluate
+from skinsuction.identify import analytic_surrogate_space
+from skinsuction.space import evaluate
 from skinsuction.identify.study import write_surrogate_space
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -45,7 +45,7 @@ def _long_study(path, n_per_group=8, effect=1.3, seed=0):
 
 
 def _toy_space():
-    from skinsuction.diagnose import NeoHookeanSlice
+    from skinsuction.space import NeoHookeanSlice
     from skinsuction.identify.measured_fit import LoadedSpace
 
     spaces = toy_spaces()

@@ -14,32 +14,10 @@ import numpy as np
 import pytest
 import yaml
 
-from skinsuction.diagnose import (
-    BASELINE,
-    Cause,
-    FitData,
-    RayInterpolant,
-    RaySpace,
-    RaySpec,
-    Settings,
-    SpaceMissingError,
-    add_arguments,
-    bic,
-    default_registry,
-    diagnose,
-    fit_model,
-    misfit_test,
-    noise_from_differences,
-    noise_from_replicates,
-    parse_ray_id,
-    ray_id,
-    rays_of,
-    read_ray_space,
-    read_ray_spaces,
-    registry_from_config,
-    write_report,
-)
-from skinsuction.diagnose._rays import RAY_ID_PATTERN, _write_parquet
+from skinsuction.diagnose import BASELINE, Cause, FitData, Settings, add_arguments, bic, default_registry, diagnose, fit_model, misfit_test, noise_from_differences, noise_from_replicates, registry_from_config, write_report
+from skinsuction.space import RayInterpolant, RaySpace, RaySpec, SpaceMissingError, parse_ray_id, ray_id, rays_of, read_ray_space, read_ray_spaces
+from skinsuction.space import RAY_ID_PATTERN
+from skinsuction.space._storage import _write_parquet
 from skinsuction.diagnose._stats import describe_residuals, difference_weights
 from skinsuction.identify import window_focusing
 from skinsuction.measured import load_measured
@@ -438,7 +416,7 @@ def _toy_csv(path, x1d, r, probes=(6.0,), p_max=100.0, step=2.0):
 
 @pytest.mark.parametrize("objective", ["single", "weighted", "ratio"])
 def test_identify_on_the_scale_free_space_recovers_the_moduli(objective, tmp_path):
-    from skinsuction.diagnose import NeoHookeanSlice
+    from skinsuction.space import NeoHookeanSlice
     from skinsuction.identify.measured_fit import identify_measured
 
     base = toy_spaces()[BASELINE]
@@ -457,7 +435,7 @@ def test_identify_on_the_scale_free_space_recovers_the_moduli(objective, tmp_pat
 
 
 def test_identify_flags_a_fit_at_the_edge_of_the_scale_free_space(tmp_path):
-    from skinsuction.diagnose import NeoHookeanSlice
+    from skinsuction.space import NeoHookeanSlice
     from skinsuction.identify.measured_fit import identify_measured
 
     base = toy_spaces()[BASELINE]  # X1d window 0.02..0.2 MPa, rays to 5000 mbar/MPa
@@ -486,7 +464,7 @@ def test_identify_flags_a_fit_at_the_edge_of_the_scale_free_space(tmp_path):
 def test_a_fit_at_a_stopped_ray_is_flagged_as_the_coverage_frontier():
     from skinsuction.identify import bound_flags, single_objective
 
-    from skinsuction.diagnose import NeoHookeanSlice
+    from skinsuction.space import NeoHookeanSlice
 
     s = toy_spaces()[BASELINE]
     rays = {q: a.copy() for q, a in s.deflection_mm.items()}

@@ -35,18 +35,8 @@ import numpy as np
 import pytest
 import yaml
 
-from skinsuction.diagnose import (
-    NONE,
-    DETECTABLE_EFFECTS,
-    DRAW_RANGES,
-    RaySpec,
-    add_arguments,
-    build_ray_spaces,
-    command,
-    draw_experiment,
-    registry_from_config,
-    write_csv,
-)
+from skinsuction.diagnose import NONE, DETECTABLE_EFFECTS, DRAW_RANGES, add_arguments, command, draw_experiment, registry_from_config, write_csv
+from skinsuction.space import RaySpec, build_ray_spaces
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -173,7 +163,7 @@ CI_ACCURACY = 0.08
 
 def test_scale_free_space_matches_direct_fe_runs(ci_spaces):
     """A handful of random points across the domain: FE on the rays' mesh vs the space."""
-    from skinsuction.diagnose import read_ray_spaces
+    from skinsuction.space import read_ray_spaces
     from skinsuction.diagnose._accuracy import compare_point, draw_points
 
     space_dir, spec, causes, _ = ci_spaces
@@ -218,7 +208,8 @@ def test_wide_domain_effect_is_named_where_detectable(ci_spaces, cause, seed):
     """Draws across the physiological domain: a detectable effect is named (or tied),
     an undetectable one is not mistaken for another cause, and neo-Hookean skin gets
     no false alarm."""
-    from skinsuction.diagnose import Settings, read_ray_spaces
+    from skinsuction.diagnose import Settings
+    from skinsuction.space import read_ray_spaces
     from skinsuction.diagnose._confusion import run_draw
 
     space_dir, spec, causes, _ = ci_spaces

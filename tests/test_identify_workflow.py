@@ -46,7 +46,7 @@ def setup():
     p = np.arange(0.0, 101.0, 2.0)
     fe = {probe: (p, surrogate_curve(*TARGET, probe_mm=probe, pressures_mbar=p).deflection_mm)
           for probe in (2.0, 6.0)}
-    from skinsuction.identify import evaluate
+    from skinsuction.space import evaluate
 
     space = {probe: (p, evaluate(s, [TARGET], p)[0]) for probe, s in spaces.items()}
     return StudySetup(spaces, {"fe": fe, "space": space}, TARGET, FAST)
@@ -311,7 +311,7 @@ def test_shifted_stencils_keep_the_space_usable_next_to_a_failed_corner():
     """One non-converged corner node (as X1d = 0.001, X1h = 1e-5 MPa of the FE space):
     "strict" loses every cell whose centred stencil holds it; "shift" only the cell
     that no NaN-free stencil contains, and stays exact for cubic data."""
-    from skinsuction.identify import GriddedSpace, SpaceInterpolant
+    from skinsuction.space import GriddedSpace, SpaceInterpolant
 
     x1d = np.linspace(0.001, 0.091, 11)
     x1h = np.linspace(1e-5, 2.01e-3, 11)

@@ -7,14 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from skinsuction.identify import (
-    analytic_surrogate_space,
-    evaluate,
-    interval_threshold,
-    polish,
-    profile_intervals,
-    single_objective,
-)
+from skinsuction.identify import analytic_surrogate_space, interval_threshold, polish, profile_intervals, single_objective
+from skinsuction.space import evaluate
 from skinsuction.identify.measured_fit import identify_measured
 from skinsuction.noise import noise_from_differences
 

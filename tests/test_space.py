@@ -15,21 +15,8 @@ from hypothesis import strategies as st
 
 from skinsuction.model import ParameterError
 from skinsuction import provenance, space
-from skinsuction.space import (
-    COLUMNS,
-    SimulatedSpace,
-    assemble_space,
-    atomic_output,
-    compute_point,
-    expand_axis,
-    grid_points,
-    parse_point_id,
-    point_id,
-    read_curve,
-    read_space,
-    round_sig,
-    write_curve,
-)
+from skinsuction.space import COLUMNS, SimulatedSpace, assemble_space, compute_point, expand_axis, grid_points, parse_point_id, point_id, read_curve, read_space, round_sig, write_curve
+from skinsuction._files import atomic_output
 
 PAPER = {
     "probes_mm": [2, 6],

@@ -265,7 +265,7 @@ TINY_SCALE_FREE = {
 
 
 def test_stand_in_scale_free_space_bundles_assembly_and_coverage(tmp_path):
-    from skinsuction.diagnose import read_ray_spaces
+    from skinsuction.space import read_ray_spaces
 
     workdir = copy_workflow(tmp_path)
     model = workdir / "src" / "skinsuction" / "model"

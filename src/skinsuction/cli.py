@@ -208,7 +208,7 @@ def _run_simulate(args: argparse.Namespace) -> int:
         raise CLIError(f"the model refused the parameters: {err}") from None
     text = _curve_csv(curve, args)
     if args.out:
-        from skinsuction.space import atomic_output
+        from skinsuction._files import atomic_output
 
         try:
             with atomic_output(args.out) as tmp:
@@ -443,7 +443,7 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exit_:  # --help, --version, usage errors
         return int(exit_.code or 0)
-    from skinsuction.identify.measured_fit import InputError
+    from skinsuction.errors import InputError
     from skinsuction.measured import MeasuredDataError
 
     try:

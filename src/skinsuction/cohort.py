@@ -68,7 +68,7 @@ MANIFESTS = ("manifest.csv", "manifest.yaml", "manifest.yml")
 
 
 def _sha256(path) -> str | None:
-    from skinsuction.identify.measured_fit import file_sha256
+    from skinsuction._files import file_sha256
 
     try:
         return file_sha256(path)
@@ -540,7 +540,7 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
     """
     from skinsuction import __version__
     from skinsuction.identify.measured_fit import load_space
-    from skinsuction.space import atomic_output
+    from skinsuction._files import atomic_output
 
     t0 = time.perf_counter()
     if not Path(path).exists():
@@ -556,7 +556,7 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
         ray_spaces = None
     else:
         from skinsuction.diagnose._diagnose import Settings
-        from skinsuction.diagnose._rays import read_ray_spaces
+        from skinsuction.space import read_ray_spaces
 
         ray_spaces = ray_spaces if ray_spaces is not None else read_ray_spaces(space_dir)
         # the study's default: one window focusing run per fit, no holdout (seconds saved

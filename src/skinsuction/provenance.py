@@ -123,10 +123,10 @@ def source_hash(*parts, root=PACKAGE_DIR, length=16) -> str:
 
     Examples
     --------
-    >>> h = source_hash("space.py")
+    >>> h = source_hash("space")
     >>> len(h)
     16
-    >>> h == source_hash("space.py")
+    >>> h == source_hash("space")
     True
     """
     root = Path(root)

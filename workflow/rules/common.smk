@@ -113,6 +113,14 @@ def code_hash(*parts):
         return "missing"
 
 
+#: The code of an FE job: the model, and the solve and storage of a point or a ray
+#: (not the whole space package: an interpolation change must not rerun 650 solves).
+FE_CODE = ("model", "space/_solve.py", "space/_storage.py", "_files.py", "provenance.py")
+FE_RAY_CODE = (*FE_CODE, "space/_rays.py", "space/_causes.py", "space/_grid.py")
+#: The code under every reader of a simulated space.
+SPACE_CODE = ("space", "_files.py", "errors.py", "provenance.py")
+
+
 def study_files(path):
     """Every file of a study folder (or the long CSV itself): inputs of its rule."""
     p = Path(path)

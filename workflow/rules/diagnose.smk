@@ -13,8 +13,8 @@ DG = config["diagnosis"]
 if "scale_free_space" not in config:
     raise _config_error("diagnosis", "needs a scale_free_space section (the space it reads)")
 DG_MEASURED = dict(DG["measured"])
-DG_CODE = code_hash("diagnose", "identify", "space.py", "measured.py", "provenance.py")
-DG_FIG_CODE = code_hash("diagnose", "identify", "figures", "space.py", "measured.py")
+DG_CODE = code_hash("diagnose", "identify", *SPACE_CODE, "measured.py")
+DG_FIG_CODE = code_hash("diagnose", "identify", "figures", *SPACE_CODE, "measured.py")
 
 for _key in ("figure5", "figure6"):
     if DG[_key]["measured"] not in DG_MEASURED:
@@ -114,7 +114,7 @@ rule diagnosis_fe_check:
         mesh=SF_SPEC.mesh,
         bottom=SF_SPEC.bottom,
         causes=SF["causes"],
-        code=code_hash("model", "diagnose"),
+        code=code_hash("diagnose", *FE_RAY_CODE),
     threads: 1
     resources:
         mem_mb=2000,
@@ -228,7 +228,7 @@ if "confusion" in DG:
             seed=DG["confusion"].get("seed", 1000),
             decision=DG.get("decision", {}),
             fit=DG.get("fit", {}),
-            code=code_hash("diagnose", "identify", "model", "figures", "space.py"),
+            code=code_hash("diagnose", "identify", "model", "figures", *SPACE_CODE),
         threads: 1
         resources:
             mem_mb=3000,

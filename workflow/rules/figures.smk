@@ -22,7 +22,7 @@ rule fig3_boundary_conditions:
         "logs/figures/fig3_boundary_conditions.log",
     params:
         pressure_mbar=FIG3_PRESSURE,
-        code=code_hash("figures", "space.py"),
+        code=code_hash("figures", *SPACE_CODE),
     threads: 1
     resources:
         mem_mb=2000,

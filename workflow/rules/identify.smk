@@ -53,8 +53,8 @@ ID_TEST_POINTS = [
     for probe in (2.0, 6.0)
 ]
 ID_CURVES = "results/identification/test_curves.csv"
-ID_CODE = code_hash("identify", "space.py", "measured.py")
-ID_FIG_CODE = code_hash("identify", "figures", "space.py", "measured.py")
+ID_CODE = code_hash("identify", *SPACE_CODE, "measured.py")
+ID_FIG_CODE = code_hash("identify", "figures", *SPACE_CODE, "measured.py")
 
 IDENTIFICATION_OUTPUTS = [
     "results/figures/fig4_single_probe.png",
@@ -90,7 +90,7 @@ rule simulate_test_curve:
         pressures=PRESSURES,
         mesh=config["mesh"],
         fallback=config["mesh_fallback"],
-        code=code_hash("model", "space.py"),
+        code=code_hash(*FE_CODE),
     threads: 1
     resources:
         mem_mb=2000,
@@ -360,7 +360,7 @@ rule fe_in_the_loop:
         settings=ID,
         loop=ID["fe_in_the_loop"],
         pressures=ID_LOOP_PRESSURES,
-        code=code_hash("identify", "model", "space.py"),
+        code=code_hash("identify", "model", *SPACE_CODE),
     threads: 1
     resources:
         mem_mb=2000,
@@ -436,7 +436,7 @@ if "scale_free_space" in config:
         params:
             settings={k: ID[k] for k in ("target", "bottom", "repeats", "seed", "alpha",
                                          "success_tolerance", "window_focusing")},
-            code=code_hash("identify", "diagnose", "figures", "space.py"),
+            code=code_hash("identify", "diagnose", "figures", *SPACE_CODE),
         threads: 1
         resources:
             mem_mb=2000,

@@ -10,12 +10,12 @@ config.scale_free_space -> FE ray bundles, one job per (model, probe, X1h/X1d)
 
 A ray is one FE curve at X1d = x1d_ref loaded to p/X1d = load.max; the scaling
 law M(s X1d, s X1h, s X2d, s p) = M(X1d, X1h, X2d, p) makes it cover every X1d
-(see skinsuction.diagnose._rays). The rays of a cause at its neutral value are
+(see skinsuction.space). The rays of a cause at its neutral value are
 the neo-Hookean rays: the same jobs.
 """
 
-from skinsuction.diagnose._causes import BASELINE, registry_from_config  # noqa: E402
-from skinsuction.diagnose._rays import (  # noqa: E402
+from skinsuction.space import BASELINE, registry_from_config  # noqa: E402
+from skinsuction.space import (  # noqa: E402
     BUNDLE_ID_PATTERN,
     RaySpec,
     bundle_id,
@@ -82,8 +82,8 @@ rule simulate_ray_bundle:
         onset=list(SF_SPEC.onset_mbar),
         mesh=SF_SPEC.mesh,
         fallback=[dict(f) for f in SF_SPEC.fallback],
-        # the model, and the fallback chain and curve format in space.py
-        code=code_hash("model", "space.py"),
+        # the model, the fallback chain, the curve format and the ray ids
+        code=code_hash(*FE_RAY_CODE),
     threads: 1
     resources:
         mem_mb=2000,
@@ -104,7 +104,7 @@ rule assemble_scale_free_space:
     params:
         spec=SF_SPEC.to_dict(),
         cause=lambda w: SF["causes"].get(w.model),
-        code=code_hash("diagnose", "space.py", "provenance.py"),
+        code=code_hash("diagnose", *SPACE_CODE),
     threads: 1
     resources:
         mem_mb=2000,
@@ -135,7 +135,7 @@ rule scale_free_coverage:
     log:
         "logs/scale_free/coverage.log",
     params:
-        code=code_hash("diagnose", "figures", "space.py"),
+        code=code_hash("diagnose", "figures", *SPACE_CODE),
     threads: 1
     resources:
         mem_mb=2000,

@@ -13,8 +13,8 @@ rule simulate_point:
         pressures=PRESSURES,
         mesh=config["mesh"],
         fallback=config["mesh_fallback"],
-        # the model, and the point adapter and curve format in space.py
-        code=code_hash("model", "space.py"),
+        # the model, the point adapter and the curve format
+        code=code_hash(*FE_CODE),
     threads: 1
     resources:
         mem_mb=2000,

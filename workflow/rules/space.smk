@@ -9,7 +9,7 @@ rule assemble_space:
     log:
         "logs/space/{space}.log",
     params:
-        code=code_hash("space.py", "provenance.py"),
+        code=code_hash(*SPACE_CODE),
     threads: 1
     resources:
         mem_mb=4000,
@@ -33,7 +33,7 @@ rule convergence_table:
     log:
         "logs/space/{space}_convergence.log",
     params:
-        code=code_hash("space.py"),
+        code=code_hash(*SPACE_CODE),
     threads: 1
     resources:
         mem_mb=2000,

@@ -1,6 +1,12 @@
 """Rule detectability_map: the diagnosis over the physiological domain (confusion, map)."""
 
+# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
+# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
 from skinsuction._threads import limit_threads
+
+limit_threads(snakemake.threads)
+
+from skinsuction._threads import limit_threads  # noqa: E402
 
 limit_threads(1)
 
@@ -9,10 +15,11 @@ from skinsuction.provenance import log_to_file  # noqa: E402
 with log_to_file(snakemake.log[0]):
     from pathlib import Path
 
-    from skinsuction.diagnose import Settings, read_ray_space
+    from skinsuction.diagnose import Settings
+    from skinsuction.space import read_ray_space
     from skinsuction.diagnose._confusion import run_draws, summarise
     from skinsuction.figures.detectability import plot_detectability
-    from skinsuction.space import write_table
+    from skinsuction._files import write_table
 
     spaces = {s.name: s for s in map(read_ray_space, snakemake.input.spaces)}
     settings = Settings.from_config(snakemake.params.decision, snakemake.params.fit)

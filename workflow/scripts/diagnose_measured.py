@@ -1,9 +1,10 @@
 """Rule diagnose_measured: `skinsuction diagnose` of one measured file of the config."""
 
-import os
+# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
+# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
+from skinsuction._threads import limit_threads
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS"):
-    os.environ[_var] = "1"
+limit_threads(snakemake.threads)
 
 import logging  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -11,7 +12,8 @@ from pathlib import Path  # noqa: E402
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
-    from skinsuction.diagnose import Settings, diagnose_file, read_ray_space, write_report
+    from skinsuction.diagnose import Settings, diagnose_file, write_report
+    from skinsuction.space import read_ray_space
 
     spaces = {s.name: s for s in map(read_ray_space, snakemake.input.spaces)}
     settings = Settings.from_config(snakemake.params.decision, snakemake.params.fit)

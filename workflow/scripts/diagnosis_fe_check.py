@@ -1,9 +1,10 @@
 """Rule diagnosis_fe_check: direct FE runs at the parameters of a diagnosis (Figure 6)."""
 
-import os
+# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
+# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
+from skinsuction._threads import limit_threads
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS"):
-    os.environ[_var] = "1"
+limit_threads(snakemake.threads)
 
 import json  # noqa: E402
 
@@ -12,7 +13,7 @@ from skinsuction.provenance import log_to_file  # noqa: E402
 with log_to_file(snakemake.log[0]):
     from skinsuction.diagnose import registry_from_config
     from skinsuction.diagnose._check import fe_check
-    from skinsuction.space import write_table
+    from skinsuction._files import write_table
 
     with open(snakemake.input.report, encoding="utf-8") as f:
         report = json.load(f)

@@ -1,6 +1,12 @@
 """Rule fig3_boundary_conditions: Figure 3 of the paper and its table."""
 
-from skinsuction.provenance import log_to_file
+# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
+# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
+from skinsuction._threads import limit_threads
+
+limit_threads(snakemake.threads)
+
+from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
     from skinsuction.figures.fig3 import build_fig3

@@ -1,11 +1,10 @@
 """Rule fig4_single_probe: Figure 4 and its table."""
 
-import os
+# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
+# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
+from skinsuction._threads import limit_threads
 
-# One BLAS/OpenMP thread (before NumPy is imported): jobs run side by side, and the
-# timings are single-thread timings.
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS"):
-    os.environ[_var] = "1"
+limit_threads(snakemake.threads)
 
 from skinsuction.provenance import log_to_file  # noqa: E402
 

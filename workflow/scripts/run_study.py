@@ -1,9 +1,10 @@
 """Rule study: `skinsuction study` of one study of the config."""
 
-import os
+# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
+# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
+from skinsuction._threads import limit_threads
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS"):
-    os.environ[_var] = "1"
+limit_threads(snakemake.threads)
 
 import logging  # noqa: E402
 from pathlib import Path  # noqa: E402

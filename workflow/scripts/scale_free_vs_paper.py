@@ -1,8 +1,14 @@
 """Rule scale_free_vs_paper: the honest test curve on the paper grid and the scale-free space."""
 
-from pathlib import Path
-
+# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
+# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
 from skinsuction._threads import limit_threads
+
+limit_threads(snakemake.threads)
+
+from pathlib import Path  # noqa: E402
+
+from skinsuction._threads import limit_threads  # noqa: E402
 
 limit_threads(1)  # single-thread timings, jobs side by side
 

@@ -9,7 +9,7 @@ limit_threads(snakemake.threads)
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
-    from skinsuction.diagnose import compute_bundle
+    from skinsuction.space import compute_bundle
 
     compute_bundle(
         snakemake.params.rays,

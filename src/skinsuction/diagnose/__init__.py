@@ -31,31 +31,10 @@ paper in µm on the concatenated fitted points.  See :mod:`._rays` for the ray
 spaces, :mod:`._stats` for the statistics and :mod:`._diagnose` for the rule.
 """
 
-from ._causes import BASELINE, DEFAULT_CAUSES, NONE, Cause, default_registry, registry_from_config
+from skinsuction.space import BASELINE, DEFAULT_CAUSES, NONE, Cause, default_registry, registry_from_config
 from ._cli import add_arguments, command
 from ._diagnose import DEFAULT_SPACE_DIR, Settings, diagnose, diagnose_file, prepare_data
 from ._fit import Fit, FitData, ModelCurves, fit_model
-from ._rays import (
-    BUNDLE_ID_PATTERN,
-    RAY_ID_PATTERN,
-    NeoHookeanSlice,
-    RayInterpolant,
-    RaySpace,
-    RaySpec,
-    SpaceMissingError,
-    assemble_ray_space,
-    build_ray_spaces,
-    bundle_id,
-    compute_bundle,
-    compute_ray,
-    coverage_frontier,
-    ray_bundles,
-    parse_ray_id,
-    ray_id,
-    rays_of,
-    read_ray_space,
-    read_ray_spaces,
-)
 from ._report import write_report
 from ._stats import bic, misfit_test, noise_from_differences, noise_from_replicates
 from ._virtual import (
@@ -72,11 +51,6 @@ __all__ = [
     "add_arguments", "command",
     "DEFAULT_SPACE_DIR", "Settings", "diagnose", "diagnose_file", "prepare_data",
     "Fit", "FitData", "ModelCurves", "fit_model",
-    "RAY_ID_PATTERN", "RayInterpolant", "RaySpace", "RaySpec", "SpaceMissingError",
-    "assemble_ray_space", "build_ray_spaces", "compute_ray", "compute_bundle",
-    "coverage_frontier", "ray_bundles", "bundle_id", "BUNDLE_ID_PATTERN", "NeoHookeanSlice",
-    "parse_ray_id", "ray_id",
-    "rays_of", "read_ray_space", "read_ray_spaces",
     "write_report",
     "bic", "misfit_test", "noise_from_differences", "noise_from_replicates",
     "DETECTABLE_EFFECTS", "DRAW_RANGES", "VirtualExperiment", "draw_experiment",

@@ -19,8 +19,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ._causes import BASELINE
-from ._rays import RayInterpolant, RaySpace
+from skinsuction.space import BASELINE
+from skinsuction.space import RayInterpolant, RaySpace
 
 __all__ = ["AccuracyPoint", "draw_points", "compare_point", "normalised_error",
            "REL_TARGET", "ABS_TARGET_UM", "PROTOCOLS"]

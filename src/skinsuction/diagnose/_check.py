@@ -13,7 +13,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from ._causes import Cause
+from skinsuction.space import Cause
 
 __all__ = ["fe_check", "models_of_figure6"]
 

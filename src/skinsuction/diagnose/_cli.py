@@ -76,10 +76,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def command(args: argparse.Namespace) -> int:
     """Run ``skinsuction diagnose``; returns the exit code (0)."""
-    from skinsuction.identify.measured_fit import InputError
+    from skinsuction.errors import InputError
 
     from ._diagnose import diagnose_file
-    from ._rays import SpaceFileError, SpaceMissingError
+    from skinsuction.space import SpaceFileError, SpaceMissingError
     from ._report import write_report
 
     settings = Settings(alpha=args.alpha, delta_bic=args.delta_bic, noise_um=args.noise_um,

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ._causes import BASELINE, NONE
+from skinsuction.space import BASELINE, NONE
 
 __all__ = ["WIDE_DOMAIN", "draw_wide", "run_draw", "run_draws", "summarise",
            "initial_stress_kpa"]

@@ -42,9 +42,9 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from skinsuction.identify import IdentificationError
-from skinsuction.identify.measured_fit import InputError
+from skinsuction.errors import InputError
 
-from ._causes import BASELINE, NONE
+from skinsuction.space import BASELINE, NONE
 from ._fit import PAPER_WF, FitData, fit_bounds, fit_intervals, fit_model
 from ._stats import (
     NoiseEstimate,
@@ -524,10 +524,10 @@ def summary_text(report: dict) -> str:
 def diagnose_file(measured_path, space_dir=DEFAULT_SPACE_DIR, settings: Settings | None = None,
                   spaces: dict | None = None) -> dict:
     """Read a measured CSV (as ``skinsuction identify`` does) and diagnose it."""
-    from skinsuction.identify.measured_fit import file_sha256
+    from skinsuction._files import file_sha256
     from skinsuction.measured import load_measured
 
-    from ._rays import read_ray_spaces
+    from skinsuction.space import read_ray_spaces
 
     if spaces is None:
         spaces = read_ray_spaces(space_dir)

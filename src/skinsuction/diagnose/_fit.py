@@ -26,7 +26,7 @@ from skinsuction.identify import (
     window_focusing,
 )
 
-from ._rays import RayInterpolant, RaySpace
+from skinsuction.space import RayInterpolant, RaySpace
 
 __all__ = ["FitData", "Fit", "ModelCurves", "fit_model", "fit_bounds", "fit_intervals",
            "PAPER_WF"]

@@ -133,7 +133,7 @@ def write_report(report: dict, out_dir, figures: bool = True) -> dict:
 
     Returns ``{name: path}``.
     """
-    from skinsuction.space import atomic_output
+    from skinsuction._files import atomic_output
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

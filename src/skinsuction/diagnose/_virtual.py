@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._causes import NONE, Cause
+from skinsuction.space import NONE, Cause
 
 __all__ = ["VirtualExperiment", "virtual_experiment", "draw_experiment", "write_csv",
            "DRAW_RANGES", "DETECTABLE_EFFECTS"]
@@ -134,7 +134,7 @@ def draw_experiment(seed, cause: Cause | None, *, effect_range=None, ranges=None
 
 def write_csv(ve: VirtualExperiment, path, header=()) -> Path:
     """Write the experiment in the measured-CSV format, labelled as synthetic."""
-    from skinsuction.space import atomic_output
+    from skinsuction._files import atomic_output
 
     lines = ["# SYNTHETIC VIRTUAL EXPERIMENT, NOT A MEASUREMENT (skinsuction FE model + noise)",
              *(f"# {h}" for h in header)]

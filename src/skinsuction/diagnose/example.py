@@ -36,7 +36,7 @@ def make_example(out="data/example_suction_synthetic.csv", params=None):
     """Run the FE model and write the example CSV (a few minutes on one core)."""
     from skinsuction.provenance import git_info
 
-    from ._causes import default_registry
+    from skinsuction.space import default_registry
     from ._virtual import virtual_experiment, write_csv
 
     e = {**EXAMPLE, **(params or {})}

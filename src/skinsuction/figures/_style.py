@@ -10,7 +10,7 @@ matplotlib.use("Agg")  # files only, no screen
 
 import matplotlib.pyplot as plt  # noqa: E402
 
-from skinsuction.space import atomic_output  # noqa: E402
+from skinsuction._files import atomic_output
 
 #: Figure width of a two-column journal figure (inches).
 WIDTH_IN = 7.0

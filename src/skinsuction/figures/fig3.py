@@ -199,7 +199,8 @@ def build_fig3(curve_paths, png, pdf, csv, pressure_mbar=None) -> pd.DataFrame:
     """Read the Figure 3 curves, write the table (CSV) and the figure (PNG, PDF)."""
     import matplotlib.pyplot as plt
 
-    from skinsuction.space import read_curves, write_table
+    from skinsuction.space import read_curves
+    from skinsuction._files import write_table
 
     frame, _ = read_curves(curve_paths)
     table = table_fig3(frame, pressure_mbar)

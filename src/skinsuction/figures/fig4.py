@@ -103,7 +103,7 @@ def build_fig4(runs_csv, png, pdf, csv, target=TARGET, success_tolerance=0.01) -
     """Read the runs, write the table (CSV) and the figure (PNG, PDF)."""
     import matplotlib.pyplot as plt
 
-    from skinsuction.space import write_table
+    from skinsuction._files import write_table
 
     runs = pd.read_csv(runs_csv)
     table = table_fig4(runs, target, success_tolerance)

@@ -108,7 +108,7 @@ def build_fig4b(space_path, test_curves_path, png, pdf, csv, landscape_out, sett
     import matplotlib.pyplot as plt
 
     from skinsuction.identify.study import cost_landscape, landscape_summary, setup_from_files
-    from skinsuction.space import atomic_output, write_table
+    from skinsuction._files import atomic_output, write_table
 
     setup = setup_from_files(space_path, test_curves_path, settings)
     alpha = float(settings.get("alpha", 0.5))

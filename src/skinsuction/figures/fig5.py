@@ -112,7 +112,7 @@ def build_fig5(measured_csv, space_parquet, png, pdf, csv, runs_csv=None, probe_
     """Identify, write the table (and runs) as CSV and the figure as PNG and PDF."""
     import matplotlib.pyplot as plt
 
-    from skinsuction.space import write_table
+    from skinsuction._files import write_table
 
     runs, result = identify_runs(measured_csv, space_parquet, probe_mm, repeats, seed,
                                  window_focusing)

@@ -114,7 +114,7 @@ def build_fig6(report_json, check_csv, png, pdf, csv):
     """Read the diagnosis report and FE check, write the table and the figure."""
     import matplotlib.pyplot as plt
 
-    from skinsuction.space import write_table
+    from skinsuction._files import write_table
 
     report = json.loads(open(report_json, encoding="utf-8").read())
     check = pd.read_csv(check_csv)

@@ -75,7 +75,7 @@ def build_fig7(runs_csv, png, pdf, csv, threshold_csv, target=TARGET, success_to
     """Read the runs; write the table, the alpha threshold (CSV) and the figure."""
     import matplotlib.pyplot as plt
 
-    from skinsuction.space import write_table
+    from skinsuction._files import write_table
 
     runs = pd.read_csv(runs_csv)
     table, threshold = table_fig7(runs, target, success_tolerance)

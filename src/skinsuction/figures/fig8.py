@@ -108,7 +108,7 @@ def build_fig8(space_path, test_curves_path, runs_csv, png, pdf, csv, curves_csv
     import matplotlib.pyplot as plt
 
     from skinsuction.identify.study import setup_from_files, summarise_runs
-    from skinsuction.space import write_table
+    from skinsuction._files import write_table
 
     setup = setup_from_files(space_path, test_curves_path, settings)
     runs = pd.read_csv(runs_csv)

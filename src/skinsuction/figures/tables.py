@@ -16,7 +16,7 @@ import math
 
 import pandas as pd
 
-from skinsuction.space import atomic_output, write_table
+from skinsuction._files import atomic_output, write_table
 
 
 def _cell(x, digits: int = 4) -> str:

@@ -8,8 +8,8 @@ algorithm minimises.
 
 Examples
 --------
->>> from skinsuction.identify import (analytic_surrogate_space, evaluate,
-...                                   single_objective, window_focusing)
+>>> from skinsuction.identify import analytic_surrogate_space, single_objective, window_focusing
+>>> from skinsuction.space import evaluate
 >>> s6 = analytic_surrogate_space(6.0)          # stands in for the FE space
 >>> curve = (s6.pressure_mbar, evaluate(s6, [[0.0055, 0.00041]])[0])
 >>> result = window_focusing(single_objective(s6, curve), seed=0)
@@ -21,7 +21,6 @@ from ._bounds import BOUND_FRACTION, bound_flags
 from ._polish import polish
 from ._intervals import Interval, LikelihoodIntervals, interval_threshold, profile_intervals
 from ._baselines import BaselineResult, differential_evolution_fit, least_squares_from_random_starts
-from ._interpolate import LagrangeAxis, SpaceInterpolant, evaluate, interpolate_pressure
 from ._objectives import (
     RatioObjective,
     SingleObjective,
@@ -32,7 +31,6 @@ from ._objectives import (
     single_objective,
     weighted_objective,
 )
-from ._space import GriddedSpace
 from ._surrogate import (
     PAPER_PRESSURE_MBAR,
     PAPER_X1D,
@@ -51,7 +49,6 @@ from ._window_focusing import (
 )
 
 __all__ = [
-    "GriddedSpace",
     "bound_flags",
     "polish",
     "Interval",
@@ -59,10 +56,6 @@ __all__ = [
     "interval_threshold",
     "profile_intervals",
     "BOUND_FRACTION",
-    "LagrangeAxis",
-    "SpaceInterpolant",
-    "interpolate_pressure",
-    "evaluate",
     "cost",
     "correlation_error",
     "SingleObjective",

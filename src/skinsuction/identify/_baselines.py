@@ -78,8 +78,8 @@ def least_squares_from_random_starts(
 
     Examples
     --------
-    >>> from skinsuction.identify import (analytic_surrogate_space, evaluate,
-    ...                                   single_objective)
+    >>> from skinsuction.identify import analytic_surrogate_space, single_objective
+    >>> from skinsuction.space import evaluate
     >>> s6 = analytic_surrogate_space(6.0)
     >>> obj = single_objective(s6, (s6.pressure_mbar, evaluate(s6, [[0.0055, 0.00041]])[0]))
     >>> r = least_squares_from_random_starts(obj, seed=0, n_starts=3)
@@ -124,8 +124,8 @@ def differential_evolution_fit(
 
     Examples
     --------
-    >>> from skinsuction.identify import (analytic_surrogate_space, evaluate,
-    ...                                   single_objective)
+    >>> from skinsuction.identify import analytic_surrogate_space, single_objective
+    >>> from skinsuction.space import evaluate
     >>> s6 = analytic_surrogate_space(6.0)
     >>> obj = single_objective(s6, (s6.pressure_mbar, evaluate(s6, [[0.0055, 0.00041]])[0]))
     >>> r = differential_evolution_fit(obj, seed=0)

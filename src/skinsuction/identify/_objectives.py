@@ -28,8 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._interpolate import SpaceInterpolant, interpolate_pressure
-from ._space import GriddedSpace
+from skinsuction.space import GriddedSpace
 
 __all__ = [
     "cost",
@@ -88,11 +87,6 @@ def _curve_arrays(curve):
     return p, m, probe
 
 
-def _as_rows(x) -> np.ndarray:
-    """Candidates as (N, d) rows: the map to moduli of a grid space (the identity)."""
-    return np.atleast_2d(np.asarray(x, dtype=float))
-
-
 def _bounds_of(*objectives):
     lower = np.max([o.lower for o in objectives], axis=0)
     upper = np.min([o.upper for o in objectives], axis=0)
@@ -118,7 +112,8 @@ class SingleObjective:
 
     Examples
     --------
-    >>> from skinsuction.identify import analytic_surrogate_space, evaluate
+    >>> from skinsuction.identify import analytic_surrogate_space
+    >>> from skinsuction.space import evaluate
     >>> s = analytic_surrogate_space(6.0)
     >>> p = s.pressure_mbar
     >>> m = evaluate(s, [[0.0055, 0.00041]])[0]
@@ -139,14 +134,10 @@ class SingleObjective:
         self.space = space
         self.pressure_mbar = p
         self.measured_mm = m
-        if hasattr(space, "interpolant_at"):  # the scale-free space (candidates in logs)
-            self.interpolant = space.interpolant_at(p)
-            self.lower, self.upper = self.interpolant.lower, self.interpolant.upper
-            self.to_moduli, self.from_moduli = space.to_moduli, space.from_moduli
-        else:
-            self.interpolant = SpaceInterpolant(interpolate_pressure(space, p), nan_policy)
-            self.lower, self.upper = space.lower, space.upper
-            self.to_moduli = self.from_moduli = _as_rows
+        # any layout of the space: candidates are moduli on a grid, logs on the scale-free one
+        self.interpolant = space.interpolant_at(p, nan_policy)
+        self.lower, self.upper = self.interpolant.lower, self.interpolant.upper
+        self.to_moduli, self.from_moduli = space.to_moduli, space.from_moduli
         self.n_points = p.size
         self._buffer = np.empty((0, p.size))
 
@@ -187,7 +178,8 @@ class WeightedObjective:
 
     Examples
     --------
-    >>> from skinsuction.identify import analytic_surrogate_space, evaluate
+    >>> from skinsuction.identify import analytic_surrogate_space
+    >>> from skinsuction.space import evaluate
     >>> x = [[0.0055, 0.00041]]
     >>> s2, s6 = analytic_surrogate_space(2.0), analytic_surrogate_space(6.0)
     >>> o2 = SingleObjective(s2, (s2.pressure_mbar, evaluate(s2, x)[0]))
@@ -252,7 +244,8 @@ class RatioObjective:
 
     Examples
     --------
-    >>> from skinsuction.identify import analytic_surrogate_space, evaluate
+    >>> from skinsuction.identify import analytic_surrogate_space
+    >>> from skinsuction.space import evaluate
     >>> x = [[0.0055, 0.00041]]
     >>> s2, s6 = analytic_surrogate_space(2.0), analytic_surrogate_space(6.0)
     >>> p = s2.pressure_mbar

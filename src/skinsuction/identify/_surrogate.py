@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._space import GriddedSpace
+from skinsuction.space import GriddedSpace
 
 __all__ = [
     "PAPER_X1D",

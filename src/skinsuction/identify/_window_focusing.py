@@ -186,8 +186,8 @@ def window_focusing(
 
     Examples
     --------
-    >>> from skinsuction.identify import (analytic_surrogate_space, evaluate,
-    ...                                   single_objective)
+    >>> from skinsuction.identify import analytic_surrogate_space, single_objective
+    >>> from skinsuction.space import evaluate
     >>> s6 = analytic_surrogate_space(6.0)
     >>> curve = (s6.pressure_mbar, evaluate(s6, [[0.0055, 0.00041]])[0])
     >>> r = window_focusing(single_objective(s6, curve), seed=1)
@@ -307,8 +307,8 @@ def identify_repeated(objective, repeats: int = 100, seed=0, **options) -> Repea
 
     Examples
     --------
-    >>> from skinsuction.identify import (analytic_surrogate_space, evaluate,
-    ...                                   single_objective)
+    >>> from skinsuction.identify import analytic_surrogate_space, single_objective
+    >>> from skinsuction.space import evaluate
     >>> s6 = analytic_surrogate_space(6.0)
     >>> curve = (s6.pressure_mbar, evaluate(s6, [[0.0055, 0.00041]])[0])
     >>> rep = identify_repeated(single_objective(s6, curve), repeats=5, seed=0)

@@ -16,7 +16,8 @@ one-line message.
 Examples
 --------
 >>> import tempfile, pathlib
->>> from skinsuction.identify import analytic_surrogate_space, evaluate
+>>> from skinsuction.identify import analytic_surrogate_space
+>>> from skinsuction.space import evaluate
 >>> s6 = analytic_surrogate_space(6.0)
 >>> d = pathlib.Path(tempfile.mkdtemp())
 >>> m = evaluate(s6, [[0.03, 0.0005]])[0]
@@ -30,21 +31,23 @@ Examples
 from __future__ import annotations
 
 import datetime as _dt
-import hashlib
 import math
 from pathlib import Path
 
 import numpy as np
 
+from skinsuction._files import file_sha256
+from skinsuction.errors import InputError
+from skinsuction.space import DEFAULT_SPACE, LoadedSpace, load_space
+
 from ._bounds import bound_flags
 from ._intervals import profile_intervals
 from ._polish import polish
 from ._objectives import ratio_objective, single_objective, weighted_objective
-from ._space import GriddedSpace
 from ._window_focusing import IdentificationError, identify_repeated
 
-__all__ = ["InputError", "OBJECTIVE_KINDS", "identify_measured", "write_identification",
-           "file_sha256"]
+__all__ = ["InputError", "OBJECTIVE_KINDS", "identify_measured", "identify_data",
+           "write_identification", "file_sha256", "load_space", "LoadedSpace"]
 
 #: Objectives of ``skinsuction identify --objective``.
 OBJECTIVE_KINDS = ("single", "weighted", "ratio")
@@ -53,106 +56,11 @@ OBJECTIVE_KINDS = ("single", "weighted", "ratio")
 SPREAD_WARNING = 0.05
 
 
-class InputError(ValueError):
-    """An input of the identification (space file, choice of curves) is unusable."""
-
-
-def file_sha256(path) -> str:
-    """SHA-256 of a file's bytes (hex)."""
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
-
-
-#: Default simulated space of ``skinsuction identify``: the scale-free space.
-DEFAULT_SPACE = "results/simulated_space/scale_free"
-
-
-def _is_scale_free(path: Path) -> bool:
-    if path.is_dir():
-        return True
-    try:
-        import json
-
-        import pyarrow.parquet as pq
-
-        meta = pq.read_schema(path).metadata or {}
-        return "ray_spec" in json.loads(meta.get(b"skinsuction", b"{}"))
-    except Exception:  # a bad file is reported by the reader below
-        return False
-
-
-def _read_scale_free(path: Path, bottom):
-    """The neo-Hookean scale-free space: ({probe: NeoHookeanSlice}, metadata, reach)."""
-    from skinsuction.diagnose._causes import BASELINE
-    from skinsuction.diagnose._rays import NeoHookeanSlice, read_ray_space, read_ray_spaces
-
-    try:
-        space = (read_ray_space(path) if path.is_file()
-                 else read_ray_spaces(path)[BASELINE])
-    except FileNotFoundError as err:
-        raise InputError(str(err)) from None
-    except Exception as err:  # pyarrow raises many types for a bad file
-        raise InputError(f"{path}: not a scale-free simulated space "
-                         f"({type(err).__name__}: {' '.join(str(err).split())[:200]})") from None
-    if space.spec.bottom != bottom:
-        raise InputError(f"{path}: the scale-free space has bottom {space.spec.bottom!r}, "
-                         f"not {bottom!r}")
-    slices = {p: NeoHookeanSlice(space, p) for p in space.probes_mm}
-    return slices, space.metadata, (0.0, space.spec.reach_mbar())
-
-
-def _read_space(space_path, bottom):
-    """The simulated space: ({probe: GriddedSpace or NeoHookeanSlice}, metadata, range)."""
-    from skinsuction.space import read_space
-
-    path = Path(space_path)
-    if not path.exists():
-        raise InputError(f"{path}: simulated space not found (build it with the workflow, "
-                         "e.g. `snakemake --cores 2 scale_free_space`)")
-    if _is_scale_free(path):
-        return _read_scale_free(path, bottom)
-    try:
-        space = read_space(path)
-        slices = space.slices()
-    except Exception as err:  # pyarrow raises many types for a bad file
-        raise InputError(f"{path}: not a simulated-space database "
-                         f"({type(err).__name__}: {' '.join(str(err).split())[:200]})") from None
-    sel = slices[slices["bottom"] == bottom]
-    if sel.empty:
-        raise InputError(f"{path}: no points with bottom condition {bottom!r} "
-                         f"(available: {sorted(set(slices['bottom']))})")
-    spaces = {}
-    for probe in sorted(set(sel["probe_mm"].astype(float))):
-        try:
-            spaces[probe] = GriddedSpace.from_space(space, probe, bottom=bottom)
-        except ValueError as err:
-            raise InputError(f"{path}: the {probe:g} mm space is not a usable grid ({err})") from None
-    p_range = (max(float(s.pressure_mbar[0]) for s in spaces.values()),
-               min(float(s.pressure_mbar[-1]) for s in spaces.values()))
-    return spaces, space.metadata, p_range
-
-
-def _pressure_range(spaces):
-    lo, hi = 0.0, math.inf
-    for s in spaces:
-        if hasattr(s, "interpolant_at"):
-            hi = min(hi, s.space.spec.reach_mbar())
-        else:
-            lo, hi = max(lo, float(s.pressure_mbar[0])), min(hi, float(s.pressure_mbar[-1]))
-    return lo, hi
-
-
-def _range_note(spaces):
-    """What sets the pressure range, for the loader's error."""
-    for s in spaces:
-        if hasattr(s, "interpolant_at"):
-            sp = s.space.spec
-            return (f"the reach of the scale-free space: p/X1d <= {sp.load_max:g} mbar/MPa "
-                    f"up to X1d = {sp.x1d_range[1]:g} MPa")
-    return "the pressures of the simulated grid"
+def _probes_of(objective: str, probe_mm: float) -> list:
+    """Probes (mm) an objective needs."""
+    if objective not in OBJECTIVE_KINDS:
+        raise InputError(f"objective must be one of {OBJECTIVE_KINDS}, got {objective!r}")
+    return [float(probe_mm)] if objective == "single" else [2.0, 6.0]
 
 
 def _pick_curve(data, probe, curve_id, path):
@@ -241,7 +149,7 @@ def identify_measured(
 
     _check_settings(alpha, repeats, seed, noise_um, level)
     space = load_space(space_path, bottom) if spaces is None else LoadedSpace.given(spaces)
-    probes_needed = space.check_probes(objective, probe_mm)
+    probes_needed = space.check_probes(_probes_of(objective, probe_mm))
     data = load_measured(measured_path, available_probes=list(space.spaces),
                          pressure_range_mbar=space.pressure_range(probes_needed),
                          range_note=space.range_note(probes_needed))
@@ -250,60 +158,6 @@ def identify_measured(
                            window_focusing=window_focusing, noise_um=noise_um, level=level)
     result["input"]["sha256"] = file_sha256(measured_path)
     return result
-
-
-class LoadedSpace:
-    """A simulated space read once for many identifications (a study).
-
-    ``spaces`` maps probe (mm) to a :class:`GriddedSpace` or a scale-free
-    ``NeoHookeanSlice``; ``info`` describes the file for the outputs.
-    """
-
-    def __init__(self, spaces: dict, info: dict, p_range=None, bottom: str = "fixed"):
-        self.spaces, self.info, self._p_range, self.bottom = spaces, info, p_range, bottom
-
-    @classmethod
-    def given(cls, spaces: dict, bottom: str = "fixed") -> "LoadedSpace":
-        return cls(spaces, {"path": None, "sha256": None, "name": "given in memory"},
-                   None, bottom)
-
-    def probe(self, p: float):
-        """The space of probe ``p`` (to 1e-6 mm); InputError naming the probes if absent."""
-        for q, s in self.spaces.items():
-            if math.isclose(float(p), float(q), abs_tol=1e-6):
-                return s
-        have = ", ".join(f"{q:g}" for q in self.spaces)
-        raise InputError(f"{self.info['path']}: the simulated space has no {float(p):g} mm "
-                         f"probe (probes: {have} mm)")
-
-    def check_probes(self, objective: str, probe_mm: float) -> list:
-        """Probes an objective needs, checked against the space."""
-        if objective not in OBJECTIVE_KINDS:
-            raise InputError(f"objective must be one of {OBJECTIVE_KINDS}, got {objective!r}")
-        needed = [float(probe_mm)] if objective == "single" else [2.0, 6.0]
-        for p in needed:
-            self.probe(p)
-        return needed
-
-    def pressure_range(self, probes) -> tuple:
-        if self._p_range is not None:
-            return self._p_range
-        return _pressure_range([self.probe(p) for p in probes])
-
-    def range_note(self, probes) -> str:
-        return _range_note([self.probe(p) for p in probes])
-
-
-def load_space(space_path=DEFAULT_SPACE, bottom: str = "fixed") -> LoadedSpace:
-    """Read a simulated space (scale-free folder or file, or a grid database) once."""
-    spaces, space_meta, p_range = _read_space(space_path, bottom)
-    sp = Path(space_path)
-    sha_of = sp if sp.is_file() else sp / "neo_hookean.parquet"
-    info = {"path": str(space_path), "sha256": file_sha256(sha_of),
-            "name": space_meta.get("space"),
-            "git_commit": (space_meta.get("git") or {}).get("commit"),
-            "mesh": space_meta.get("mesh") or (space_meta.get("ray_spec") or {}).get("mesh")}
-    return LoadedSpace(spaces, info, p_range, bottom)
 
 
 def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_mm: float = 6.0,
@@ -318,7 +172,7 @@ def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_
     from skinsuction import __version__
 
     _check_settings(alpha, repeats, seed, noise_um, level)
-    probes_needed = space.check_probes(objective, probe_mm)
+    probes_needed = space.check_probes(_probes_of(objective, probe_mm))
     spaces = {p: space.probe(p) for p in probes_needed}
     space_info = space.info
     bottom = space.bottom
@@ -354,7 +208,7 @@ def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_
     runs_mpa = obj.to_moduli(rep.estimates)
     q25, q75 = np.percentile(runs_mpa, [25, 75], axis=0)
     warnings = data_warnings
-    scale_free = any(hasattr(s, "interpolant_at") for s in spaces.values())
+    scale_free = any(s.layout == "scale_free" for s in spaces.values())
     # the window focusing stops near, not on, the minimum of a flat valley or of a
     # bound: a bounded least-squares polish from the median finishes the job (and
     # tells whether the best fit of the space sits on its edge)
@@ -572,7 +426,7 @@ def _bounds_json(obj, scale_free: bool) -> dict:
 def _bound_keys(spaces, obj, space_info):
     """Configuration keys that widen each end of the X1d and X1h axes."""
     first = next(iter(spaces.values()))
-    if hasattr(first, "interpolant_at"):
+    if first.layout == "scale_free":
         spec = first.space.spec
         raised = obj.lower[0] > math.log10(spec.x1d_range[0]) + 1e-12
         x1d_lo = ("scale_free_space.load.max (the curve's largest pressure over load.max "
@@ -618,7 +472,7 @@ def write_identification(result: dict, out_dir) -> dict:
 
     from skinsuction.figures import _style
     from skinsuction.figures.fit import plot_fit
-    from skinsuction.space import atomic_output
+    from skinsuction._files import atomic_output
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

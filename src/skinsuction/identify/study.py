@@ -23,7 +23,8 @@ both moduli are within ``success_tolerance`` (default 1 %) of the truth.
 
 Examples
 --------
->>> from skinsuction.identify import analytic_surrogate_space, evaluate
+>>> from skinsuction.identify import analytic_surrogate_space
+>>> from skinsuction.space import evaluate
 >>> spaces = {p: analytic_surrogate_space(p) for p in (2.0, 6.0)}
 >>> curves = {"space": {p: (s.pressure_mbar, evaluate(s, [TARGET])[0])
 ...                     for p, s in spaces.items()}}
@@ -46,9 +47,9 @@ import numpy as np
 import pandas as pd
 
 from ._baselines import differential_evolution_fit, least_squares_from_random_starts
-from ._interpolate import evaluate
+from skinsuction.space import evaluate
 from ._objectives import ratio_objective, single_objective, weighted_objective
-from ._space import GriddedSpace
+from skinsuction.space import GriddedSpace
 from ._window_focusing import identify_repeated
 
 log = logging.getLogger(__name__)
@@ -144,7 +145,8 @@ def make_test_curves(space_path, fe_curve_paths, out_csv=None, *, target=TARGET,
         only finite deflections (a non-converged FE curve keeps its converged
         part, with a warning in the log).
     """
-    from skinsuction.space import read_curves, write_table
+    from skinsuction.space import read_curves
+    from skinsuction._files import write_table
 
     frame, _ = read_curves(fe_curve_paths)
     target = np.asarray(target, dtype=float)
@@ -804,7 +806,7 @@ RUN_STUDIES = ("single_probe", "alpha_sweep", "ratio")
 def write_runs(study: str, space_path, test_curves_path, out_csv, settings: dict,
                alphas=None) -> pd.DataFrame:
     """Run one of :data:`RUN_STUDIES` (Figures 4, 7, 8) and write its runs as CSV."""
-    from skinsuction.space import write_table
+    from skinsuction._files import write_table
 
     setup = setup_from_files(space_path, test_curves_path, settings)
     common = {"repeats": int(settings.get("repeats", 100)), "seed": int(settings.get("seed", 0))}
@@ -829,7 +831,7 @@ def scale_free_setup(space_dir, test_curves_path, *, target=TARGET, bottom="fixe
     Only the ``sources`` of the test curves are kept: the curve taken from the
     paper grid's interpolant is not a test of another space.
     """
-    from skinsuction.diagnose._rays import NeoHookeanSlice, read_ray_spaces
+    from skinsuction.space import NeoHookeanSlice, read_ray_spaces
 
     base = read_ray_spaces(space_dir)["neo_hookean"]
     if base.spec.bottom != bottom:
@@ -889,7 +891,7 @@ def write_space_comparison(paper_space, scale_free_dir, test_curves_path, csv, m
                            runs_csv, settings: dict) -> pd.DataFrame:
     """Paper grid vs scale-free space on the honest test curve: the workflow's table."""
     from skinsuction.figures.tables import markdown_table, write_markdown
-    from skinsuction.space import write_table
+    from skinsuction._files import write_table
 
     target = (settings["target"]["x1d"], settings["target"]["x1h"])
     bottom = settings.get("bottom", "fixed")
@@ -926,7 +928,7 @@ def write_fe_in_the_loop(space_path, out_json, settings: dict, loop: dict,
     """Run :func:`fe_in_the_loop` within the bounds of the space; write the JSON record."""
     import json
 
-    from skinsuction.space import atomic_output
+    from skinsuction._files import atomic_output
 
     probe = float(loop.get("probe_mm", 6.0))
     bottom = settings.get("bottom", "fixed")

@@ -45,8 +45,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from skinsuction.identify import LagrangeAxis
-from skinsuction.space import (
+from ._causes import BASELINE, Cause
+from ._solve import solve_with_fallbacks
+from ._storage import (
     AXES,
     POINT_ID_PATTERN,
     _fmt,
@@ -56,17 +57,13 @@ from skinsuction.space import (
     parse_point_id,
     point_id,
     round_sig,
-    solve_with_fallbacks,
 )
-
-from ._causes import BASELINE, Cause
 
 log = logging.getLogger(__name__)
 
 __all__ = [
     "RaySpec",
     "RaySpace",
-    "RayInterpolant",
     "ray_id",
     "parse_ray_id",
     "RAY_ID_PATTERN",
@@ -77,7 +74,6 @@ __all__ = [
     "compute_ray",
     "compute_bundle",
     "coverage_frontier",
-    "NeoHookeanSlice",
     "assemble_ray_space",
     "read_ray_space",
     "read_ray_spaces",
@@ -247,7 +243,7 @@ class RaySpec:
                     study_fallback=None) -> "RaySpec":
         """From the ``scale_free_space`` section (axis forms allowed); mesh = study mesh
         updated by its ``mesh``; fallbacks = its ``mesh_fallback`` or the study's."""
-        from skinsuction.space import expand_axis
+        from ._grid import expand_axis
 
         mesh = {**(study_mesh or {}), **(section.get("mesh") or {})}
         load = section.get("load", {})
@@ -652,286 +648,3 @@ def _compute_bundle_job(job):
 
 
 # ------------------------------------------------------------------ interpolation
-def _weights_at(axis: LagrangeAxis, x, start) -> np.ndarray:
-    """Lagrange weights of the stencils starting at ``start`` (not necessarily centred)."""
-    from skinsuction.identify._interpolate import _numerators
-
-    m = axis.m
-    table = axis._table[start]
-    w = _numerators(np.asarray(x, dtype=float)[:, None] - table[:, :m])
-    w /= table[:, m:]
-    return w
-
-
-def _alternative_starts(axis: LagrangeAxis, x, centred):
-    """Other stencil starts that still contain the cell of each x: [None, shifts...].
-
-    ``None`` stands for the centred start; a shift that leaves the cell outside the
-    stencil falls back to the centred one for that point.
-    """
-    cell = np.clip(np.searchsorted(axis.nodes, x, side="right") - 1, 0, axis.nodes.size - 2)
-    lo = np.maximum(cell + 2 - axis.m, 0)
-    hi = np.minimum(cell, axis.n_starts - 1)
-    out = [None]
-    for shift in (1, -1, 2, -2):
-        s = centred + shift
-        ok = (s >= lo) & (s <= hi)
-        if ok.any():
-            out.append(np.where(ok, s, centred))
-    return out
-
-
-class RayInterpolant:
-    """M(X1d, X1h, c, p) of one probe at fixed measured pressures, vectorised.
-
-    Parameters
-    ----------
-    space : RaySpace
-    probe_mm : float
-    pressure_mbar : array_like (u,)
-        Measured pressures (mbar), any protocol.
-
-    Calling it with ``theta (N, d)`` = ``(log10 X1d, log10 r[, u])`` (``u`` the
-    cause's axis coordinate, :meth:`Cause.to_axis`) returns the deflections
-    (N, u) in mm; NaN outside the space or beyond the reach of a ray.  Any
-    pressures >= 0 are allowed: the lowest X1d searched is raised to
-    ``p_max / load_max`` (:attr:`lower`).
-    """
-
-    def __init__(self, space: RaySpace, probe_mm: float, pressure_mbar):
-        self.space = space
-        self.probe_mm = float(probe_mm)
-        p = np.asarray(pressure_mbar, dtype=float).reshape(-1)
-        spec = space.spec
-        if p.size == 0 or np.any(p < 0) or not np.all(np.isfinite(p)):
-            raise ValueError("pressures must be finite and >= 0 mbar")
-        self.pressure_mbar = p
-        self.x1d_min = spec.x1d_lower(p.max())
-        if self.x1d_min >= spec.x1d_range[1]:
-            raise ValueError(
-                f"a pressure of {p.max():g} mbar is beyond the reach of the scale-free space: "
-                f"p/X1d <= {spec.load_max:g} mbar/MPa and X1d <= {spec.x1d_range[1]:g} MPa "
-                f"allow at most {spec.reach_mbar():g} mbar (scale_free_space.load.max, "
-                "scale_free_space.x1d_mpa.max)")
-        self.x1d_ref = spec.x1d_ref
-        rays = space.rays(probe_mm)  # (n_r, n_c, n_p)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            g = np.log(rays[..., 1:])  # log M at p > 0; M(0) = 0
-        g[~np.isfinite(g)] = np.nan  # a zero or negative deflection is unusable
-        self._g = g
-        self._axis_r = LagrangeAxis(np.log10(spec.ratio_nodes))
-        self._axis_c = (LagrangeAxis(space.cause.axis_nodes) if space.cause is not None
-                        else None)
-        self._axis_p = LagrangeAxis(np.asarray(spec.pressures_mbar))
-        self.d = 2 if space.cause is None else 3
-
-    @property
-    def lower(self) -> np.ndarray:
-        """Lower bounds of theta: log10 X1d (raised by the load reach), log10 r[, u]."""
-        s = self.space.spec
-        lo = [math.log10(self.x1d_min), math.log10(s.ratio_nodes[0])]
-        if self.d == 3:
-            lo.append(float(self.space.cause.axis_nodes[0]))
-        return np.array(lo)
-
-    @property
-    def upper(self) -> np.ndarray:
-        s = self.space.spec
-        hi = [math.log10(s.x1d_range[1]), math.log10(s.ratio_nodes[-1])]
-        if self.d == 3:
-            hi.append(float(self.space.cause.axis_nodes[-1]))
-        return np.array(hi)
-
-    def _combine(self, theta, start_r, start_c=None):
-        """log M of the candidates' rays with the given stencil starts, (N, n_p - 1)."""
-        wr = _weights_at(self._axis_r, theta[:, 1], start_r)
-        ir = start_r[:, None] + np.arange(self._axis_r.m)
-        # a ray with weight exactly 0 (the candidate sits on a node) is ignored, so a
-        # neighbouring ray that stopped early does not spoil a node (NaN * 0 = NaN)
-        if self.d == 2:
-            stencil = self._g[ir, 0]  # (N, mr, n_p - 1)
-            stencil = np.where((wr == 0.0)[:, :, None], 0.0, stencil)
-            return np.einsum("nk,nkp->np", wr, stencil)
-        wc = _weights_at(self._axis_c, theta[:, 2], start_c)
-        ic = start_c[:, None] + np.arange(self._axis_c.m)
-        stencil = self._g[ir[:, :, None], ic[:, None, :]]  # (N, mr, mc, n_p - 1)
-        w = wr[:, :, None] * wc[:, None, :]
-        stencil = np.where((w == 0.0)[..., None], 0.0, stencil)
-        return np.einsum("nkl,nklp->np", w, stencil)
-
-    def combined_rays(self, theta) -> np.ndarray:
-        """The rays at (r, c) of the candidates on the ray pressures, (N, n_p), mm.
-
-        NaN policy "shift" (as the identification's): where the centred stencil
-        holds a ray that stopped early, the other stencils that still contain the
-        candidate's cell are tried in turn, pressure by pressure.
-        """
-        theta = np.asarray(theta, dtype=float)
-        n = theta.shape[0]
-        sr, wr = self._axis_r.weights(theta[:, 1])
-        outside = np.isnan(wr[:, 0])
-        sc = None
-        if self.d == 3:
-            sc, wc = self._axis_c.weights(theta[:, 2])
-            outside |= np.isnan(wc[:, 0])
-        g = self._combine(theta, sr, sc)
-        g[outside] = np.nan  # no extrapolation
-        bad = np.flatnonzero(np.isnan(g).any(axis=1) & ~outside)
-        if bad.size:
-            th = theta[bad]
-            opt_r = _alternative_starts(self._axis_r, th[:, 1], sr[bad])
-            opt_c = (_alternative_starts(self._axis_c, th[:, 2], sc[bad]) if self.d == 3
-                     else [None])
-            sub = g[bad]
-            for a in opt_r:
-                for b in opt_c:
-                    if a is None and b is None:
-                        continue
-                    ra = sr[bad] if a is None else a
-                    cb = None if self.d == 2 else (sc[bad] if b is None else b)
-                    hole = np.isnan(sub)
-                    if not hole.any():
-                        break
-                    alt = self._combine(th, ra, cb)
-                    sub = np.where(hole, alt, sub)
-            g[bad] = sub
-        out = np.empty((n, g.shape[1] + 1))
-        out[:, 0] = 0.0
-        np.exp(g, out=out[:, 1:])
-        return out
-
-    def __call__(self, theta, out=None) -> np.ndarray:
-        theta = np.atleast_2d(np.asarray(theta, dtype=float))
-        if theta.shape[1] != self.d:
-            raise ValueError(f"candidates must have {self.d} columns, got {theta.shape}")
-        n, u = theta.shape[0], self.pressure_mbar.size
-        rays = self.combined_rays(theta)  # (N, n_p)
-        x1d = 10.0 ** theta[:, 0]
-        # the scaling law: the candidate at p reads its ray at load p / X1d, i.e. at the
-        # pressure p X1d_ref / X1d of the FE run; beyond the ray's reach: NaN
-        q = self.pressure_mbar[None, :] * (self.x1d_ref / x1d)[:, None]  # (N, u)
-        start, w = self._axis_p.weights(q.reshape(-1))
-        idx = start[:, None] + np.arange(self._axis_p.m)  # (N u, m)
-        rows = np.repeat(np.arange(n), u)[:, None]
-        nodes = rays[rows, idx]
-        vals = np.where(w == 0.0, 0.0, w * nodes).sum(axis=1)
-        # next to where a ray stopped, the centred stencil reaches past its last load:
-        # shift it back while it still holds the candidate's cell
-        hole = np.flatnonzero(np.isnan(vals) & ~np.isnan(w[:, 0]))
-        if hole.size:
-            qh = q.reshape(-1)[hole]
-            cell = np.searchsorted(self._axis_p.nodes, qh, side="right") - 1
-            for shift in (1, 2):
-                s = start[hole] - shift
-                ok = (s >= 0) & (s + self._axis_p.m - 2 >= cell)
-                if not ok.any():
-                    break
-                ws = _weights_at(self._axis_p, qh[ok], s[ok])
-                ids = s[ok, None] + np.arange(self._axis_p.m)
-                alt = np.where(ws == 0.0, 0.0, ws * rays[rows[hole[ok]], ids]).sum(axis=1)
-                fill = hole[ok]
-                vals[fill] = np.where(np.isnan(vals[fill]), alt, vals[fill])
-        vals = vals.reshape(n, u)
-        if out is None:
-            return vals
-        out[...] = vals
-        return out
-
-
-class NeoHookeanSlice:
-    """The neo-Hookean scale-free space of one probe, for the identification objectives.
-
-    What :class:`skinsuction.identify.SingleObjective` needs of a space: a
-    probe, an interpolant at the measured pressures and the map of its
-    candidates to moduli.  The candidates are ``theta = (log10 X1d, log10 X1h/X1d)``,
-    so the window focusing samples decades evenly and the window is the box of
-    the space (the X1d window of the configuration, its lower end raised to
-    ``p_max / load_max``).
-
-    Parameters
-    ----------
-    space : RaySpace
-        The neo-Hookean space (or a cause's space, whose neutral rays are used).
-    probe_mm : float
-    """
-
-    coordinates = ("log10 X1d", "log10 X1h/X1d")
-
-    def __init__(self, space: RaySpace, probe_mm: float):
-        self.space = space.null_slice()
-        self.space.rays(probe_mm)  # KeyError naming the probes if absent
-        self.probe_mm = float(probe_mm)
-
-    def interpolant_at(self, pressure_mbar) -> "TabulatedInterpolant":
-        # a study measures every subject with the same protocol: tabulate it once
-        p = np.asarray(pressure_mbar, dtype=float)
-        key = p.tobytes()
-        cache = self.__dict__.setdefault("_tables", {})
-        if key not in cache:
-            if len(cache) >= 16:
-                cache.pop(next(iter(cache)))
-            cache[key] = TabulatedInterpolant(self.space, self.probe_mm, p)
-        return cache[key]
-
-    @staticmethod
-    def to_moduli(theta) -> np.ndarray:
-        """(N, 2) X1d, X1h in MPa of candidates theta."""
-        t = np.atleast_2d(np.asarray(theta, dtype=float))
-        x1d = 10.0 ** t[:, 0]
-        return np.stack([x1d, x1d * 10.0 ** t[:, 1]], axis=1)
-
-    @staticmethod
-    def from_moduli(x) -> np.ndarray:
-        """Candidates theta of (N, 2) moduli X1d, X1h in MPa."""
-        x = np.atleast_2d(np.asarray(x, dtype=float))
-        return np.stack([np.log10(x[:, 0]), np.log10(x[:, 1] / x[:, 0])], axis=1)
-
-
-class TabulatedInterpolant:
-    """The neo-Hookean space of one probe at fixed pressures, tabulated for speed.
-
-    The rays are read once (:class:`RayInterpolant`) on a fine grid of
-    ``log10 X1d`` (``step`` decades, over the X1d window) times the ratio nodes,
-    at the measured pressures; candidates are then interpolated by the 4 x 4
-    cubic stencils of the identification (:class:`skinsuction.identify.SpaceInterpolant`,
-    NaN policy "shift") on ``log M``, exactly as the paper grid is, so one
-    iteration of the window focusing costs what it costs on the paper grid.
-    Along log X1d the table is much finer than M varies (0.01 decades: M moves
-    by about 2 % between nodes), so it adds an error far below the rays' own.
-
-    Attributes
-    ----------
-    lower, upper : ndarray (2,)
-        Bounds of theta = (log10 X1d, log10 X1h/X1d), as :class:`RayInterpolant`'s.
-    """
-
-    def __init__(self, space: RaySpace, probe_mm: float, pressure_mbar, step: float = 0.01):
-        from skinsuction.identify import GriddedSpace, SpaceInterpolant
-
-        rays = RayInterpolant(space, probe_mm, pressure_mbar)
-        if rays.d != 2:
-            raise ValueError("only the neo-Hookean space is tabulated")
-        self.lower, self.upper = rays.lower, rays.upper
-        self.pressure_mbar = rays.pressure_mbar
-        n = max(4, int(math.ceil((self.upper[0] - self.lower[0]) / step)) + 1)
-        lx = np.linspace(self.lower[0], self.upper[0], n)
-        lr = np.log10(np.asarray(space.spec.ratio_nodes))
-        grid = np.stack(np.meshgrid(lx, lr, indexing="ij"), axis=-1).reshape(-1, 2)
-        self._pos = self.pressure_mbar > 0
-        # in chunks: a 2000-point curve on the whole table is 1e7 values per stencil node
-        chunk = max(16, 2_000_000 // max(self.pressure_mbar.size, 1))
-        m = np.concatenate([rays(grid[i:i + chunk]) for i in range(0, grid.shape[0], chunk)])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            g = np.log(m[:, self._pos])
-        g[~np.isfinite(g)] = np.nan
-        table = GriddedSpace(lx, lr, self.pressure_mbar[self._pos],
-                             g.reshape(n, lr.size, -1), probe_mm)
-        self._log_m = SpaceInterpolant(table, "shift")
-
-    def __call__(self, candidates, out=None) -> np.ndarray:
-        cand = np.atleast_2d(np.asarray(candidates, dtype=float))
-        if out is None:
-            out = np.empty((cand.shape[0], self.pressure_mbar.size))
-        out[:, ~self._pos] = 0.0
-        out[:, self._pos] = np.exp(self._log_m(cand))
-        return out

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._space import GriddedSpace
+from ._gridded import GriddedSpace
 
 __all__ = ["LagrangeAxis", "SpaceInterpolant", "interpolate_pressure", "evaluate"]
 

@@ -107,3 +107,38 @@ class GriddedSpace:
     def converged(self) -> np.ndarray:
         """Boolean (n1, n2, n_p): True where the FE model gave a deflection."""
         return np.isfinite(self.deflection_mm)
+
+    # -- the layout-independent face of a space (:class:`skinsuction.space.ProbeSpace`)
+    layout = "grid"
+    coordinates = ("X1d", "X1h")
+
+    @property
+    def pressure_range(self) -> tuple[float, float]:
+        """Pressures (mbar) a measured curve may span: those of the grid."""
+        return float(self.pressure_mbar[0]), float(self.pressure_mbar[-1])
+
+    def range_note(self) -> str:
+        """What sets :attr:`pressure_range`, for error messages."""
+        return "the pressures of the simulated grid"
+
+    def interpolant_at(self, pressure_mbar, nan_policy: str = "shift"):
+        """Omega_s at fixed pressures: a callable ``(N, 2) candidates -> (N, u) mm``
+        with ``lower`` and ``upper`` (:class:`skinsuction.space.SpaceInterpolant`).
+
+        Examples
+        --------
+        >>> p = np.arange(0.0, 101.0, 50.0)
+        >>> s = GriddedSpace([1.0, 2.0], [1.0, 2.0], p, np.broadcast_to(p, (2, 2, 3)), 6)
+        >>> s.interpolant_at([25.0])([[1.5, 1.5]]).tolist()
+        [[25.0]]
+        """
+        from ._interpolate import SpaceInterpolant, interpolate_pressure
+
+        return SpaceInterpolant(interpolate_pressure(self, pressure_mbar), nan_policy)
+
+    @staticmethod
+    def to_moduli(candidates) -> np.ndarray:
+        """(N, 2) X1d, X1h in MPa of candidates (the grid's candidates are the moduli)."""
+        return np.atleast_2d(np.asarray(candidates, dtype=float))
+
+    from_moduli = to_moduli

@@ -198,7 +198,7 @@ def registry_from_config(causes: dict) -> dict:
     (``modulus`` defaults to False).  Node lists may use the axis forms of the
     configuration (see :func:`skinsuction.space.expand_axis`).
     """
-    from skinsuction.space import expand_axis
+    from ._grid import expand_axis
 
     out = {}
     for name, spec in (causes or {}).items():

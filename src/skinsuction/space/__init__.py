@@ -1,0 +1,118 @@
+"""The simulated space Omega_s: FE curves computed once, interpolated off their nodes.
+
+Two layouts of one abstraction.  The **grid** of the paper (section 2.3):
+one FE curve per (X1d, X1h) node, cubic Lagrange in X1d, X1h and p
+(:class:`SimulatedSpace`, :class:`GriddedSpace`).  The **scale-free** space:
+by the scaling law M(s X1d, s X1h, s X2d, s p) = M(X1d, X1h, X2d, p) one FE
+*ray* per (X1h/X1d, cause coordinate), loaded to p/X1d = ``load_max``, covers
+every X1d and every pressure protocol (:class:`RaySpace`,
+:class:`RayInterpolant`, :class:`NeoHookeanSlice`).  Both are read by
+:func:`load_space` as one :class:`ProbeSpace` per probe, which is all that
+:mod:`skinsuction.identify` and :mod:`skinsuction.diagnose` ask of a space:
+deflections at (candidates, pressures).
+
+Modules: ``_storage`` (point ids, curve files, Parquet with provenance),
+``_solve`` (FE solves with fallback meshes), ``_grid`` and ``_gridded`` (the
+grid layout), ``_causes`` (the cause coordinates of the scale-free space),
+``_rays`` and ``_ray_interpolate`` (the scale-free layout), ``_interpolate``
+(cubic Lagrange, the NaN policy), ``_open`` (either layout, per probe).
+
+Examples
+--------
+>>> import numpy as np
+>>> from skinsuction.space import GriddedSpace, point_id
+>>> p = np.arange(0.0, 101.0, 50.0)
+>>> s = GriddedSpace([0.01, 0.02], [1e-4, 2e-4], p, np.broadcast_to(p / 1e3, (2, 2, 3)), 6)
+>>> s.interpolant_at([75.0])([[0.015, 1.5e-4]]).round(6).tolist()
+[[0.075]]
+>>> point_id({"probe_mm": 6, "x1d": 0.08, "x1h": 0.00041})
+'p6_fixed_x1d0.08_x1h0.00041_x2d0_x2h0_td1_th1'
+"""
+
+from skinsuction._files import atomic_output, write_table
+
+from ._causes import (
+    BASELINE,
+    DEFAULT_CAUSES,
+    NONE,
+    SCALES,
+    Cause,
+    default_registry,
+    registry_from_config,
+)
+from ._grid import (
+    SimulatedSpace,
+    assemble_space,
+    convergence_summary,
+    expand_axis,
+    grid_points,
+    read_space,
+)
+from ._gridded import GriddedSpace
+from ._interpolate import LagrangeAxis, SpaceInterpolant, evaluate, interpolate_pressure
+from ._open import DEFAULT_SPACE, LoadedSpace, ProbeSpace, load_space
+from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
+from ._rays import (
+    BUNDLE_ID_PATTERN,
+    EXTRA_KEYWORDS,
+    RAY_ID_PATTERN,
+    RaySpace,
+    RaySpec,
+    SpaceFileError,
+    SpaceMissingError,
+    assemble_ray_space,
+    build_ray_spaces,
+    bundle_id,
+    compute_bundle,
+    compute_ray,
+    coverage_frontier,
+    parse_ray_id,
+    ray_bundles,
+    ray_id,
+    rays_of,
+    read_ray_space,
+    read_ray_spaces,
+)
+from ._solve import compute_point, solve_with_fallbacks
+from ._storage import (
+    AXES,
+    BOTTOMS,
+    COLUMNS,
+    DEFAULTS,
+    METADATA_KEY,
+    POINT_ID_PATTERN,
+    SIGNIFICANT_DIGITS,
+    SPEC_KEYS,
+    CorruptCurveError,
+    curve_frame,
+    parse_point_id,
+    point_id,
+    read_curve,
+    read_curves,
+    round_sig,
+    write_curve,
+)
+
+__all__ = [
+    # the abstraction
+    "ProbeSpace", "LoadedSpace", "load_space", "DEFAULT_SPACE",
+    # storage
+    "AXES", "BOTTOMS", "COLUMNS", "DEFAULTS", "METADATA_KEY", "POINT_ID_PATTERN",
+    "SIGNIFICANT_DIGITS", "SPEC_KEYS", "CorruptCurveError", "curve_frame", "parse_point_id",
+    "point_id", "read_curve", "read_curves", "round_sig", "write_curve",
+    "atomic_output", "write_table",
+    # FE solves
+    "compute_point", "solve_with_fallbacks",
+    # the grid layout
+    "SimulatedSpace", "assemble_space", "convergence_summary", "expand_axis", "grid_points",
+    "read_space", "GriddedSpace",
+    # interpolation
+    "LagrangeAxis", "SpaceInterpolant", "evaluate", "interpolate_pressure",
+    # the scale-free layout
+    "BASELINE", "DEFAULT_CAUSES", "NONE", "SCALES", "Cause", "default_registry",
+    "registry_from_config", "BUNDLE_ID_PATTERN", "EXTRA_KEYWORDS", "RAY_ID_PATTERN",
+    "RaySpace", "RaySpec", "SpaceFileError", "SpaceMissingError", "assemble_ray_space",
+    "build_ray_spaces", "bundle_id", "compute_bundle", "compute_ray", "coverage_frontier",
+    "parse_ray_id", "ray_bundles", "ray_id", "rays_of", "read_ray_space", "read_ray_spaces",
+    "NeoHookeanSlice", "RayInterpolant", "TabulatedInterpolant",
+]

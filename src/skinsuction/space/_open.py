@@ -1,0 +1,195 @@
+"""Open a simulated space in either layout, as one space per probe.
+
+The identification and the diagnosis never ask which layout a space has: the
+paper's grid (:class:`GriddedSpace`) and the scale-free rays
+(:class:`NeoHookeanSlice`) both offer what :class:`ProbeSpace` lists.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Protocol
+
+import numpy as np
+
+from skinsuction._files import file_sha256
+from skinsuction.errors import InputError
+
+from ._causes import BASELINE
+from ._grid import read_space
+from ._gridded import GriddedSpace
+from ._ray_interpolate import NeoHookeanSlice
+from ._rays import read_ray_space, read_ray_spaces
+
+__all__ = ["ProbeSpace", "LoadedSpace", "load_space", "DEFAULT_SPACE"]
+
+
+class ProbeSpace(Protocol):
+    """What identify and diagnose ask of the simulated space of one probe.
+
+    Attributes
+    ----------
+    layout : {"grid", "scale_free"}
+        Which layout (for messages that name configuration keys).
+    probe_mm : float
+        Aperture diameter.
+    coordinates : tuple of str
+        Names of the candidates' coordinates (moduli on a grid, logs on rays).
+    pressure_range : (float, float)
+        Pressures (mbar) a measured curve may span.
+    """
+
+    layout: str
+    probe_mm: float
+    coordinates: tuple
+    pressure_range: tuple
+
+    def interpolant_at(self, pressure_mbar, nan_policy: str = "shift"):
+        """Callable ``(N, d) candidates -> (N, u)`` deflections (mm), with ``lower``, ``upper``."""
+
+    def to_moduli(self, candidates) -> np.ndarray:
+        """``(N, 2)`` X1d, X1h (MPa) of candidates."""
+
+    def from_moduli(self, moduli) -> np.ndarray:
+        """Candidates of ``(N, 2)`` moduli."""
+
+    def range_note(self) -> str:
+        """What sets ``pressure_range``, for error messages."""
+
+
+#: Default simulated space of ``skinsuction identify``: the scale-free space.
+DEFAULT_SPACE = "results/simulated_space/scale_free"
+
+
+def _is_scale_free(path: Path) -> bool:
+    if path.is_dir():
+        return True
+    try:
+        import json
+
+        import pyarrow.parquet as pq
+
+        meta = pq.read_schema(path).metadata or {}
+        return "ray_spec" in json.loads(meta.get(b"skinsuction", b"{}"))
+    except Exception:  # a bad file is reported by the reader below
+        return False
+
+
+def _read_scale_free(path: Path, bottom):
+    """The neo-Hookean scale-free space: ({probe: NeoHookeanSlice}, metadata, reach)."""
+    try:
+        space = (read_ray_space(path) if path.is_file()
+                 else read_ray_spaces(path)[BASELINE])
+    except FileNotFoundError as err:
+        raise InputError(str(err)) from None
+    except Exception as err:  # pyarrow raises many types for a bad file
+        raise InputError(f"{path}: not a scale-free simulated space "
+                         f"({type(err).__name__}: {' '.join(str(err).split())[:200]})") from None
+    if space.spec.bottom != bottom:
+        raise InputError(f"{path}: the scale-free space has bottom {space.spec.bottom!r}, "
+                         f"not {bottom!r}")
+    slices = {p: NeoHookeanSlice(space, p) for p in space.probes_mm}
+    return slices, space.metadata, (0.0, space.spec.reach_mbar())
+
+
+def _read_space(space_path, bottom):
+    """The simulated space: ({probe: GriddedSpace or NeoHookeanSlice}, metadata, range)."""
+    path = Path(space_path)
+    if not path.exists():
+        raise InputError(f"{path}: simulated space not found (build it with the workflow, "
+                         "e.g. `snakemake --cores 2 scale_free_space`)")
+    if _is_scale_free(path):
+        return _read_scale_free(path, bottom)
+    try:
+        space = read_space(path)
+        slices = space.slices()
+    except Exception as err:  # pyarrow raises many types for a bad file
+        raise InputError(f"{path}: not a simulated-space database "
+                         f"({type(err).__name__}: {' '.join(str(err).split())[:200]})") from None
+    sel = slices[slices["bottom"] == bottom]
+    if sel.empty:
+        raise InputError(f"{path}: no points with bottom condition {bottom!r} "
+                         f"(available: {sorted(set(slices['bottom']))})")
+    spaces = {}
+    for probe in sorted(set(sel["probe_mm"].astype(float))):
+        try:
+            spaces[probe] = GriddedSpace.from_space(space, probe, bottom=bottom)
+        except ValueError as err:
+            raise InputError(f"{path}: the {probe:g} mm space is not a usable grid ({err})") from None
+    p_range = (max(float(s.pressure_mbar[0]) for s in spaces.values()),
+               min(float(s.pressure_mbar[-1]) for s in spaces.values()))
+    return spaces, space.metadata, p_range
+
+
+
+
+class LoadedSpace:
+    """A simulated space read once for many identifications (a study).
+
+    ``spaces`` maps probe (mm) to the space of that probe in either layout (a
+    :class:`GriddedSpace` or a :class:`NeoHookeanSlice`: both are
+    :class:`ProbeSpace`); ``info`` describes the file for the outputs.
+    """
+
+    def __init__(self, spaces: dict, info: dict, p_range=None, bottom: str = "fixed"):
+        self.spaces, self.info, self._p_range, self.bottom = spaces, info, p_range, bottom
+
+    @classmethod
+    def given(cls, spaces: dict, bottom: str = "fixed") -> "LoadedSpace":
+        return cls(spaces, {"path": None, "sha256": None, "name": "given in memory"},
+                   None, bottom)
+
+    def probe(self, p: float):
+        """The space of probe ``p`` (to 1e-6 mm); InputError naming the probes if absent."""
+        for q, s in self.spaces.items():
+            if math.isclose(float(p), float(q), abs_tol=1e-6):
+                return s
+        have = ", ".join(f"{q:g}" for q in self.spaces)
+        raise InputError(f"{self.info['path']}: the simulated space has no {float(p):g} mm "
+                         f"probe (probes: {have} mm)")
+
+    def check_probes(self, probes) -> list:
+        """The probes (mm) as floats, each checked against the space."""
+        needed = [float(p) for p in probes]
+        for p in needed:
+            self.probe(p)
+        return needed
+
+    def pressure_range(self, probes) -> tuple:
+        if self._p_range is not None:
+            return self._p_range
+        ranges = [self.probe(p).pressure_range for p in probes]
+        return max(r[0] for r in ranges), min(r[1] for r in ranges)
+
+    def range_note(self, probes) -> str:
+        """What sets :meth:`pressure_range`, for the loader's error."""
+        notes = [self.probe(p).range_note() for p in probes]
+        return next((n for n in notes if "scale-free" in n), notes[0])
+
+
+def load_space(space_path=DEFAULT_SPACE, bottom: str = "fixed") -> LoadedSpace:
+    """Read a simulated space once, whatever its layout.
+
+    Parameters
+    ----------
+    space_path : path-like
+        The scale-free space (its folder or its ``neo_hookean.parquet``) or a
+        grid database (e.g. the paper's ``results/simulated_space/paper.parquet``).
+    bottom : str
+        Bottom condition of the curves to use.
+
+    Raises
+    ------
+    skinsuction.errors.InputError
+        Naming the path when it is missing, unreadable, of another bottom
+        condition or not a usable grid.
+    """
+    spaces, space_meta, p_range = _read_space(space_path, bottom)
+    sp = Path(space_path)
+    sha_of = sp if sp.is_file() else sp / "neo_hookean.parquet"
+    info = {"path": str(space_path), "sha256": file_sha256(sha_of),
+            "name": space_meta.get("space"),
+            "git_commit": (space_meta.get("git") or {}).get("commit"),
+            "mesh": space_meta.get("mesh") or (space_meta.get("ray_spec") or {}).get("mesh")}
+    return LoadedSpace(spaces, info, p_range, bottom)
