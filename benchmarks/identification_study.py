@@ -25,8 +25,7 @@ import pandas as pd
 
 from skinsuction.identify import analytic_surrogate_space
 from skinsuction.space import evaluate
-from skinsuction.identify.study import (
-    TARGET,
+from skinsuction.paper import (
     StudySetup,
     alpha_sweep,
     alpha_threshold,
@@ -35,6 +34,7 @@ from skinsuction.identify.study import (
     ratio_study,
     single_probe_study,
     summarise_runs,
+    target_of,
     timing_study,
 )
 
@@ -51,7 +51,13 @@ def main(argv=None):
                         help="mesh refinement of the FE test curves (default: the space's)")
     parser.add_argument("--repeats", type=int, default=100)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--config", default="config/config.yaml",
+                        help="the test point is identification.target of this config")
     args = parser.parse_args(argv)
+    import yaml
+
+    with open(args.config, encoding="utf-8") as f:
+        TARGET = target_of(yaml.safe_load(f)["identification"])  # noqa: N806
 
     if args.space:
         spaces = load_spaces(args.space)

@@ -20,7 +20,7 @@ import pytest
 from skinsuction import cli
 from skinsuction.identify import analytic_surrogate_space
 from skinsuction.space import evaluate
-from skinsuction.identify.study import write_surrogate_space
+from skinsuction.identify import write_surrogate_space
 
 ROOT = Path(__file__).resolve().parents[1]
 X1D = np.linspace(0.001, 0.091, 7)

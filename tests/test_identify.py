@@ -361,7 +361,7 @@ def test_baselines_recover_the_paper_parameters(s6, fit):
 def test_compare_spaces_runs_every_objective_with_and_without_polish():
     from skinsuction.identify import analytic_surrogate_space
     from skinsuction.space import evaluate
-    from skinsuction.identify.study import StudySetup, compare_spaces
+    from skinsuction.paper import StudySetup, compare_spaces
 
     s = {p: analytic_surrogate_space(p) for p in (2.0, 6.0)}
     # a curve between grid nodes: the window focusing alone stops short of it

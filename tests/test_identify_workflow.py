@@ -17,9 +17,9 @@ import pandas as pd
 import pytest
 import yaml
 
-from skinsuction.identify import analytic_surrogate_space
-from skinsuction.identify import study
-from skinsuction.identify.study import (
+from skinsuction import paper
+from skinsuction.identify import analytic_surrogate_space, surrogate_curve, write_surrogate_space
+from skinsuction.paper import (
     StudySetup,
     alpha_threshold,
     cost_landscape,
@@ -29,9 +29,7 @@ from skinsuction.identify.study import (
     optimiser_comparison,
     single_probe_study,
     summarise_runs,
-    surrogate_curve,
     timing_study,
-    write_surrogate_space,
 )
 from skinsuction.space import point_id, write_curve
 
@@ -66,7 +64,7 @@ def test_make_test_curves_has_both_variants(tmp_path):
     table = make_test_curves(space, fe, tmp_path / "t.csv", target=TARGET)
     assert set(table["source"]) == {"fe", "space"} and set(table["probe_mm"]) == {2.0, 6.0}
     assert len(table) == 4 * 51
-    curves = study.read_test_curves(tmp_path / "t.csv")
+    curves = paper.read_test_curves(tmp_path / "t.csv")
     for probe in (2.0, 6.0):
         (pf, mf), (ps, ms) = curves["fe"][probe], curves["space"][probe]
         assert np.array_equal(pf, ps)
@@ -173,7 +171,7 @@ X1H = [1.0e-5, 4.1e-4, 8.1e-4, 1.21e-3, 1.61e-3, 2.01e-3]
 STAND_IN = '''"""Stand-in for the FE model (workflow tests only): the analytic surrogate."""
 from types import SimpleNamespace as Curve  # noqa: F401
 
-from skinsuction.identify.study import surrogate_curve as simulate  # noqa: F401
+from skinsuction.identify import surrogate_curve as simulate  # noqa: F401
 '''
 CONFIG = {
     "spaces": {"tiny": {"probes_mm": [2, 6], "x1d": X1D, "x1h": X1H}},

@@ -34,6 +34,15 @@ import sys
 from dataclasses import dataclass
 from typing import Callable
 
+from skinsuction._argtypes import (
+    non_negative,
+    non_negative_int,
+    positive,
+    positive_int,
+    refinement,
+    unit_interval,
+)
+
 __all__ = ["main", "build_parser", "COMMANDS", "Command", "CLIError"]
 
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT, EXIT_NOT_CONVERGED, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
@@ -58,73 +67,12 @@ class Command:
     run: Callable[[argparse.Namespace], int]
 
 
-# ------------------------------------------------------------ argument types
-def _number(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"not a finite number: {text!r}")
-    return value
-
-
-def positive(text: str) -> float:
-    value = _number(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {text}")
-    return value
-
-
-def non_negative(text: str) -> float:
-    value = _number(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
-    return value
-
-
-def _whole_number(text: str, minimum: int) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if value < minimum:
-        raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {text}")
-    return value
-
-
-def non_negative_int(text: str) -> int:
-    """argparse type: an integer >= 0 (seeds)."""
-    return _whole_number(text, 0)
-
-
 def interval_text(iv: dict) -> str:
     """``[lo, hi]`` of an interval of a JSON result (see ``Interval.text``)."""
     from skinsuction.identify import Interval
 
     return Interval(iv["estimate"], iv["lower"], iv["upper"], iv["lower_open"],
                     iv["upper_open"]).text()
-
-
-def refinement(text: str) -> float:
-    """argparse type: a mesh density factor in [0.25, 1] or a whole number 2..8 (the schema's)."""
-    value = positive(text)
-    if 0.25 <= value <= 1 or (value == int(value) and 2 <= value <= 8):
-        return value
-    raise argparse.ArgumentTypeError(
-        f"must be a number in [0.25, 1] or a whole number from 2 to 8, got {text}")
-
-
-def unit_interval(text: str) -> float:
-    value = _number(text)
-    if not 0 <= value <= 1:
-        raise argparse.ArgumentTypeError(f"must lie in [0, 1], got {text}")
-    return value
-
-
-def positive_int(text: str) -> int:
-    """argparse type: an integer >= 1."""
-    return _whole_number(text, 1)
 
 
 def _fmt(x) -> str:

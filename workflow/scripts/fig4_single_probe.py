@@ -9,7 +9,7 @@ limit_threads(snakemake.threads)
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
-    from skinsuction.figures.fig4 import build_fig4
+    from skinsuction.paper import build_fig4
 
     t = snakemake.params.target
     build_fig4(

@@ -9,7 +9,7 @@ limit_threads(snakemake.threads)
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
-    from skinsuction.figures.fig4b import build_fig4b
+    from skinsuction.paper import build_fig4b
 
     settings = dict(snakemake.params.settings)
     build_fig4b(

@@ -9,7 +9,7 @@ limit_threads(snakemake.threads)
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
-    from skinsuction.identify.study import write_runs
+    from skinsuction.paper import write_runs
 
     write_runs(
         snakemake.wildcards.study,

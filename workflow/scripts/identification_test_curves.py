@@ -9,7 +9,7 @@ limit_threads(snakemake.threads)
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
-    from skinsuction.identify.study import make_test_curves
+    from skinsuction.paper import make_test_curves
 
     t = snakemake.params.target
     make_test_curves(

@@ -9,7 +9,7 @@ limit_threads(snakemake.threads)
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
-    from skinsuction.figures.tables import build_comparison
+    from skinsuction.paper import build_comparison
 
     build_comparison(
         snakemake.input.space,

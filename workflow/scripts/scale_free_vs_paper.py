@@ -15,7 +15,7 @@ limit_threads(1)  # single-thread timings, jobs side by side
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
-    from skinsuction.identify.study import write_space_comparison
+    from skinsuction.paper import write_space_comparison
 
     write_space_comparison(
         snakemake.input.paper,

@@ -7,7 +7,7 @@
 
 Bad input (file, spaces) raises ``ValueError`` subclasses with one-line messages
 (:class:`skinsuction.measured.MeasuredDataError`,
-:class:`skinsuction.identify.measured_fit.InputError`), which the CLI prints
+:class:`skinsuction.errors.InputError`), which the CLI prints
 with exit code 2.
 """
 
@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from skinsuction.cli import _number, non_negative, non_negative_int, positive, positive_int
+from skinsuction._argtypes import non_negative, non_negative_int, number, positive, positive_int
 
 from ._diagnose import DEFAULT_SPACE_DIR, Settings
 
@@ -31,7 +31,7 @@ def _level(text):
 
 
 def _negative(text):
-    v = _number(text)
+    v = number(text)
     if not v < 0:
         raise argparse.ArgumentTypeError(f"must be negative, got {text}")
     return v

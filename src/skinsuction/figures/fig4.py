@@ -6,19 +6,6 @@ identified 100 times (N = 1000, Nb = 20, C = 1e-6 µm) with the 6 mm probe alone
 interpolated space; we show that variant (hollow markers) next to the honest
 one, a direct FE run at the test point (filled markers).  Rows: identified X1d
 and X1h against the identification number; the truth is the dashed line.
-
-Examples
---------
->>> import numpy as np, pandas as pd
->>> runs = pd.DataFrame({"source": "fe", "objective": ["single_6mm"] * 3 + ["single_2mm"] * 3,
-...                      "repeat": [0, 1, 2] * 2, "x1d": 0.0055, "x1h": 0.00041,
-...                      "E": 0.1, "E_unit": "µm", "iterations": 12, "seconds": 0.01,
-...                      "n_evaluations": 12000, "converged": True})
->>> table = table_fig4(runs)
->>> table[["objective", "success_fraction"]].values.tolist()
-[['single_6mm', 1.0], ['single_2mm', 1.0]]
->>> len(plot_fig4(runs, table).axes)
-4
 """
 
 from __future__ import annotations
@@ -38,25 +25,13 @@ SOURCE_STYLE = {
               "label": "test curve: interpolated space (paper)"},
 }
 
-TARGET = (0.0055, 0.00041)
-
-
-def table_fig4(runs: pd.DataFrame, target=TARGET, success_tolerance=0.01) -> pd.DataFrame:
-    """Per test curve and probe: estimates, errors in % of the truth, success rate."""
-    from skinsuction.identify.study import summarise_runs
-
-    table = summarise_runs(runs, target, ("source", "objective"), success_tolerance)
-    order = {k: i for i, (k, _) in enumerate(PANELS)}
-    table["_o"] = table["objective"].map(order)
-    table["_s"] = table["source"].map({"fe": 0, "space": 1})
-    return table.sort_values(["_s", "_o"]).drop(columns=["_o", "_s"]).reset_index(drop=True)
 
 
 def _fmt_pct(x):
     return f"{x:+.1f} %" if abs(x) < 999.5 else f"{x:+.3g} %"
 
 
-def plot_fig4(runs: pd.DataFrame, table: pd.DataFrame, target=TARGET):
+def plot_fig4(runs: pd.DataFrame, table: pd.DataFrame, target):
     """Figure 4 from the runs and their table (:func:`table_fig4`)."""
     import matplotlib.pyplot as plt
 
@@ -99,16 +74,3 @@ def plot_fig4(runs: pd.DataFrame, table: pd.DataFrame, target=TARGET):
     return fig
 
 
-def build_fig4(runs_csv, png, pdf, csv, target=TARGET, success_tolerance=0.01) -> pd.DataFrame:
-    """Read the runs, write the table (CSV) and the figure (PNG, PDF)."""
-    import matplotlib.pyplot as plt
-
-    from skinsuction._files import write_table
-
-    runs = pd.read_csv(runs_csv)
-    table = table_fig4(runs, target, success_tolerance)
-    write_table(table, csv)
-    fig = plot_fig4(runs, table, target)
-    _style.save(fig, png, pdf)
-    plt.close(fig)
-    return table

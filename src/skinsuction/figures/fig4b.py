@@ -7,18 +7,6 @@ orange contour encloses the valley ``E <= 2 E_min``; the star is the truth, the
 cross the grid minimum.  A valley that runs along X1h means the objective cannot tell the
 hypodermis modulus: that is what the 2 mm probe shows (paper, section 3.2).
 Grey: the space is not usable there (non-converged FE points).
-
-Examples
---------
->>> import numpy as np, pandas as pd
->>> xd, xh = np.meshgrid(np.geomspace(1e-3, 1e-1, 5), np.geomspace(1e-5, 2e-3, 5), indexing="ij")
->>> e = (np.log(xd / 0.0055) ** 2 + 0.01 * np.log(xh / 4.1e-4) ** 2).ravel() + 1e-3
->>> land = pd.DataFrame({"objective": "single_2mm", "x1d": xd.ravel(), "x1h": xh.ravel(),
-...                      "cost": e, "E": e, "E_unit": "µm"})
->>> from skinsuction.identify.study import landscape_summary
->>> fig = plot_fig4b(land, landscape_summary(land))
->>> fig.axes[0].get_title()
-'(a) 2 mm probe alone'
 """
 
 from __future__ import annotations
@@ -35,14 +23,13 @@ TITLES = {
     "ratio": "ratio 6 mm / 2 mm",
 }
 
-TARGET = (0.0055, 0.00041)
 
 #: The valley of a landscape: E <= VALLEY_FACTOR * min E.
 VALLEY_FACTOR = 2.0
 
 
-def plot_fig4b(landscape: pd.DataFrame, summary: pd.DataFrame, target=TARGET, alpha=0.5):
-    """Figure 4b from the landscape (:func:`skinsuction.identify.study.cost_landscape`)."""
+def plot_fig4b(landscape: pd.DataFrame, summary: pd.DataFrame, target, alpha=0.5):
+    """Figure 4b from the landscape (:func:`skinsuction.paper.cost_landscape`)."""
     import matplotlib.pyplot as plt
     from matplotlib import colors
 
@@ -102,23 +89,3 @@ def plot_fig4b(landscape: pd.DataFrame, summary: pd.DataFrame, target=TARGET, al
     return fig
 
 
-def build_fig4b(space_path, test_curves_path, png, pdf, csv, landscape_out, settings: dict,
-                points: int = 161, source: str = "fe") -> pd.DataFrame:
-    """Compute the landscapes, write them (Parquet), the summary (CSV) and the figure."""
-    import matplotlib.pyplot as plt
-
-    from skinsuction.identify.study import cost_landscape, landscape_summary, setup_from_files
-    from skinsuction._files import atomic_output, write_table
-
-    setup = setup_from_files(space_path, test_curves_path, settings)
-    alpha = float(settings.get("alpha", 0.5))
-    land = cost_landscape(setup, source=source, points=points, alpha=alpha)
-    with atomic_output(landscape_out) as tmp:
-        land.to_parquet(tmp, index=False)
-    summary = landscape_summary(land, setup.target, VALLEY_FACTOR)
-    summary.insert(0, "source", source)
-    write_table(summary, csv)
-    fig = plot_fig4b(land, summary, setup.target, alpha)
-    _style.save(fig, png, pdf)
-    plt.close(fig)
-    return summary

@@ -24,37 +24,11 @@ Examples
 
 from __future__ import annotations
 
-import numpy as np
 import pandas as pd
 
 from skinsuction.figures import _style
 
-__all__ = ["identify_runs", "table_fig5", "plot_fig5", "build_fig5"]
-
-
-def identify_runs(measured_csv, space_parquet, probe_mm=6.0, repeats=100, seed=0,
-                  window_focusing=None):
-    """100 single-probe identifications (``skinsuction identify``) -> (runs, result)."""
-    from skinsuction.identify.measured_fit import identify_measured
-
-    result = identify_measured(measured_csv, space_parquet, objective="single",
-                               probe_mm=probe_mm, repeats=repeats, seed=seed,
-                               window_focusing=window_focusing)
-    runs = pd.DataFrame(result["runs"]).rename(
-        columns={"x1d_mpa": "x1d_mpa", "x1h_mpa": "x1h_mpa", "E": "E_um"})
-    runs.insert(0, "repeat", np.arange(len(runs)))
-    return runs, result
-
-
-def _truth_from_header(measured_csv):
-    from skinsuction.measured import load_measured
-
-    meta = load_measured(measured_csv).metadata
-    try:
-        return {"x1d": float(meta["true_x1d_mpa"]), "x1h": float(meta["true_x1h_mpa"]),
-                "cause": meta.get("true_cause", "")}
-    except (KeyError, ValueError):
-        return None
+__all__ = ["table_fig5", "plot_fig5"]
 
 
 def table_fig5(runs: pd.DataFrame, truth=None, result=None) -> pd.DataFrame:
@@ -107,21 +81,3 @@ def plot_fig5(runs: pd.DataFrame, table: pd.DataFrame, truth=None, probe_mm=6.0)
     return fig
 
 
-def build_fig5(measured_csv, space_parquet, png, pdf, csv, runs_csv=None, probe_mm=6.0,
-               repeats=100, seed=0, window_focusing=None) -> pd.DataFrame:
-    """Identify, write the table (and runs) as CSV and the figure as PNG and PDF."""
-    import matplotlib.pyplot as plt
-
-    from skinsuction._files import write_table
-
-    runs, result = identify_runs(measured_csv, space_parquet, probe_mm, repeats, seed,
-                                 window_focusing)
-    truth = _truth_from_header(measured_csv)
-    table = table_fig5(runs, truth, result)
-    write_table(table, csv)
-    if runs_csv:
-        write_table(runs, runs_csv)
-    fig = plot_fig5(runs, table, truth, probe_mm)
-    _style.save(fig, png, pdf)
-    plt.close(fig)
-    return table

@@ -9,60 +9,20 @@ candidate, labelled "not retained", when the verdict is ``none``).  The lines
 are direct FE runs at the identified parameters (``fe_check.csv``), so the E
 printed per panel (eq. 7, both probes' points together) is that of true
 simulated curves; the E of the interpolated fit is given next to it.
-
-Examples
---------
->>> import pandas as pd
->>> t = pd.DataFrame({"panel": ["a"] * 2 + ["b"] * 2, "label": ["nh"] * 2 + ["ext"] * 2,
-...                   "model": ["neo_hookean"] * 2 + ["c"] * 2, "probe_mm": 6.0,
-...                   "pressure_mbar": [50.0, 100.0] * 2, "measured_mm": [0.5, 0.8] * 2,
-...                   "fe_mm": [0.51, 0.79, 0.5, 0.8], "interpolated_mm": [0.51, 0.79, 0.5, 0.8],
-...                   "converged": True, "param_X1d": 0.05, "param_X1h": 5e-4})
->>> s = table_fig6(t)
->>> s["E_fe_um"].round(2).tolist()
-[7.07, 0.0]
->>> len(plot_fig6(t, s).axes)
-4
 """
 
 from __future__ import annotations
 
-import json
 
-import numpy as np
 import pandas as pd
 
 from skinsuction.figures import _style
 
-__all__ = ["table_fig6", "plot_fig6", "build_fig6"]
+__all__ = ["plot_fig6"]
 
 PROBE_COLOR = {6.0: "#1b6ca8", 2.0: "#d1495b"}
 SYMBOL = {"X1d": ("$X_1^d$", "MPa"), "X1h": ("$X_1^h$", "MPa"), "X2d": ("$X_2^d$", "MPa"),
           "t_d": ("$t_d$", "mm"), "lambda0": (r"$\lambda_0$", "")}
-
-
-def table_fig6(check: pd.DataFrame) -> pd.DataFrame:
-    """Per panel: model, parameters, E of the FE curves and of the interpolated fit (µm)."""
-    from skinsuction.diagnose._check import e_um
-
-    rows = []
-    for panel, g in check.groupby("panel", sort=True):
-        row = {"panel": panel, "label": g["label"].iloc[0], "model": g["model"].iloc[0]}
-        for c in g.columns:
-            if c.startswith("param_") and g[c].notna().any():
-                row[c[6:]] = float(g[c].iloc[0])
-        res_fe = 1e3 * (g["measured_mm"] - g["fe_mm"]).to_numpy(float)
-        res_in = 1e3 * (g["measured_mm"] - g["interpolated_mm"]).to_numpy(float)
-        row["E_fe_um"] = e_um(res_fe)
-        row["E_interpolated_um"] = e_um(res_in)
-        row["max_abs_fe_minus_interpolated_um"] = float(
-            np.nanmax(np.abs(1e3 * (g["fe_mm"] - g["interpolated_mm"]))))
-        row["converged"] = bool(g["converged"].all())
-        for probe, gp in g.groupby("probe_mm"):
-            r = 1e3 * (gp["measured_mm"] - gp["fe_mm"]).to_numpy(float)
-            row[f"E_fe_{probe:g}mm_um"] = e_um(r)
-        rows.append(row)
-    return pd.DataFrame(rows)
 
 
 def _params_text(row):
@@ -110,19 +70,3 @@ def plot_fig6(check: pd.DataFrame, table: pd.DataFrame, title=None):
     return fig
 
 
-def build_fig6(report_json, check_csv, png, pdf, csv):
-    """Read the diagnosis report and FE check, write the table and the figure."""
-    import matplotlib.pyplot as plt
-
-    from skinsuction._files import write_table
-
-    report = json.loads(open(report_json, encoding="utf-8").read())
-    check = pd.read_csv(check_csv)
-    table = table_fig6(check)
-    table.insert(1, "cause", report["cause"])
-    write_table(table, csv)
-    fig = plot_fig6(check, table, title=f"{report['input'].get('file')}: diagnosis "
-                                        f"'{report['cause']}'")
-    _style.save(fig, png, pdf)
-    plt.close(fig)
-    return table

@@ -5,20 +5,6 @@ Paper section 3.3.1: 100 identifications of the weighted objective per alpha
 MPa, X1h = 0.00041 MPa.  The paper: above alpha = 0.75 the results drift;
 alpha = 0.5 identifies in every case.  Dots: every identification (shifted
 sideways per test-curve variant); lines: medians; dashed: the truth.
-
-Examples
---------
->>> import pandas as pd
->>> runs = pd.DataFrame({"source": "fe", "objective": "weighted", "alpha": [0.0, 0.0, 1.0, 1.0],
-...                      "repeat": [0, 1, 0, 1], "x1d": [0.0055, 0.0055, 0.0056, 0.0054],
-...                      "x1h": [0.00041, 0.00041, 0.0007, 0.0001], "E": 0.1, "E_unit": "µm",
-...                      "iterations": 12, "seconds": 0.01, "n_evaluations": 12000,
-...                      "converged": True})
->>> table, threshold = table_fig7(runs)
->>> table["success_fraction"].tolist(), threshold["last_alpha_ok_from_0"].tolist()
-([1.0, 0.0], [0.0])
->>> len(plot_fig7(runs, table).axes)
-2
 """
 
 from __future__ import annotations
@@ -27,18 +13,10 @@ import numpy as np
 import pandas as pd
 
 from skinsuction.figures import _style
-from skinsuction.figures.fig4 import SOURCE_STYLE, TARGET
+from skinsuction.figures.fig4 import SOURCE_STYLE
 
 
-def table_fig7(runs: pd.DataFrame, target=TARGET, success_tolerance=0.01, min_success=0.95):
-    """Per test curve and alpha: estimates, errors, success; and the alpha threshold."""
-    from skinsuction.identify.study import alpha_threshold, summarise_runs
-
-    table = summarise_runs(runs, target, ("source", "alpha"), success_tolerance)
-    return table, alpha_threshold(table, min_success)
-
-
-def plot_fig7(runs: pd.DataFrame, table: pd.DataFrame, target=TARGET):
+def plot_fig7(runs: pd.DataFrame, table: pd.DataFrame, target):
     """Figure 7 from the runs and their table."""
     import matplotlib.pyplot as plt
 
@@ -71,17 +49,3 @@ def plot_fig7(runs: pd.DataFrame, table: pd.DataFrame, target=TARGET):
     return fig
 
 
-def build_fig7(runs_csv, png, pdf, csv, threshold_csv, target=TARGET, success_tolerance=0.01):
-    """Read the runs; write the table, the alpha threshold (CSV) and the figure."""
-    import matplotlib.pyplot as plt
-
-    from skinsuction._files import write_table
-
-    runs = pd.read_csv(runs_csv)
-    table, threshold = table_fig7(runs, target, success_tolerance)
-    write_table(table, csv)
-    write_table(threshold, threshold_csv)
-    fig = plot_fig7(runs, table, target)
-    _style.save(fig, png, pdf)
-    plt.close(fig)
-    return table

@@ -16,44 +16,19 @@ Examples
 >>> curves = pd.concat([curves.assign(pressure_mbar=x, value=0.01 * x + 0.1) for x in p])
 >>> runs = pd.DataFrame({"source": "fe", "objective": "ratio", "repeat": [0, 1],
 ...                      "x1d": [0.0055, 0.0056], "x1h": [0.00041, 0.0004]})
->>> len(plot_fig8(curves, runs).axes)
+>>> len(plot_fig8(curves, runs, target=(0.0055, 0.00041)).axes)
 3
 """
 
 from __future__ import annotations
 
-import numpy as np
 import pandas as pd
 
 from skinsuction.figures import _style
-from skinsuction.figures.fig4 import SOURCE_STYLE, TARGET
+from skinsuction.figures.fig4 import SOURCE_STYLE
 
 
-def curves_fig8(setup, runs: pd.DataFrame) -> pd.DataFrame:
-    """Long table of the curves of panels (a) and (b), per test-curve variant.
-
-    Columns ``source, kind, pressure_mbar, value`` with kinds ``M_6mm``,
-    ``M_2mm`` (mm), ``Gamma``, ``Theta_truth``, ``Theta_estimate``.
-    """
-    from skinsuction.identify.study import build_objective
-
-    rows = []
-    for source in setup.sources:
-        for probe in (6.0, 2.0):
-            p, m = setup.curves[source][probe]
-            rows.append(pd.DataFrame({"source": source, "kind": f"M_{probe:g}mm",
-                                      "pressure_mbar": p, "value": m}))
-        obj = build_objective(setup, "ratio", source)
-        est = runs.loc[runs["source"] == source, ["x1d", "x1h"]].median().to_numpy(float)
-        theta = obj.theta(np.array([setup.target, est]))
-        for kind, values in (("Gamma", obj.gamma), ("Theta_truth", theta[0]),
-                             ("Theta_estimate", theta[1])):
-            rows.append(pd.DataFrame({"source": source, "kind": kind,
-                                      "pressure_mbar": obj.pressure_mbar, "value": values}))
-    return pd.concat(rows, ignore_index=True)
-
-
-def plot_fig8(curves: pd.DataFrame, runs: pd.DataFrame, target=TARGET):
+def plot_fig8(curves: pd.DataFrame, runs: pd.DataFrame, target):
     """Figure 8 from :func:`curves_fig8` and the ratio runs."""
     import matplotlib.pyplot as plt
 
@@ -102,22 +77,3 @@ def plot_fig8(curves: pd.DataFrame, runs: pd.DataFrame, target=TARGET):
     return fig
 
 
-def build_fig8(space_path, test_curves_path, runs_csv, png, pdf, csv, curves_csv,
-               settings: dict) -> pd.DataFrame:
-    """Read the ratio runs; write the summary and curve tables (CSV) and the figure."""
-    import matplotlib.pyplot as plt
-
-    from skinsuction.identify.study import setup_from_files, summarise_runs
-    from skinsuction._files import write_table
-
-    setup = setup_from_files(space_path, test_curves_path, settings)
-    runs = pd.read_csv(runs_csv)
-    table = summarise_runs(runs, setup.target, ("source", "objective"),
-                           float(settings.get("success_tolerance", 0.01)))
-    write_table(table, csv)
-    curves = curves_fig8(setup, runs)
-    write_table(curves, curves_csv)
-    fig = plot_fig8(curves, runs, setup.target)
-    _style.save(fig, png, pdf)
-    plt.close(fig)
-    return table

@@ -36,7 +36,9 @@ from ._surrogate import (
     PAPER_X1D,
     PAPER_X1H,
     analytic_surrogate_space,
+    surrogate_curve,
     surrogate_deflection,
+    write_surrogate_space,
 )
 from ._window_focusing import (
     IdentificationError,
@@ -79,4 +81,6 @@ __all__ = [
     "PAPER_PRESSURE_MBAR",
     "surrogate_deflection",
     "analytic_surrogate_space",
+    "surrogate_curve",
+    "write_surrogate_space",
 ]

@@ -69,3 +69,45 @@ def analytic_surrogate_space(
     x1h = np.asarray(x1h, dtype=float)
     m = surrogate_deflection(x1d[:, None], x1h[None, :], pressure_mbar, probe_mm)
     return GriddedSpace(x1d, x1h, pressure_mbar, m, probe_mm)
+
+
+def surrogate_curve(x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, probe_mm=6.0,
+                    bottom="fixed", pressures_mbar=None, mesh=None):
+    """The analytic surrogate as a :class:`skinsuction.model.Curve`-like object.
+
+    Same call as :func:`skinsuction.model.simulate`, no FE: for tests,
+    examples and plumbing runs of the workflow only.
+    """
+    from types import SimpleNamespace
+
+    
+    p = np.arange(0.0, 101.0, 2.0) if pressures_mbar is None else np.asarray(pressures_mbar, float)
+    m = surrogate_deflection(x1d, x1h, p, probe_mm)
+    return SimpleNamespace(pressure_mbar=p, deflection_mm=m, converged=True,
+                           last_converged_mbar=float(p[-1]), reason="", newton_iterations=0,
+                           dofs=0, seconds=0.0, info={"surrogate": True, "mesh": mesh})
+
+
+def write_surrogate_space(path, x1d, x1h, pressures_mbar, probes=(2.0, 6.0), *,
+                          curves_dir=None, name="surrogate") -> None:
+    """A simulated-space database filled with the analytic surrogate (not the FE model).
+
+    For tests and demonstrations of the identification without FE runs.  With
+    ``curves_dir`` the per-point curve files are written there as well (as the
+    workflow's ``results/curves``).
+    """
+    import tempfile
+    from pathlib import Path
+
+    from skinsuction.space import assemble_space, grid_points, point_id, write_curve
+
+    spec = {"probes_mm": list(probes), "x1d": list(x1d), "x1h": list(x1h)}
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(curves_dir) if curves_dir is not None else Path(tmp)
+        paths = []
+        for params in grid_points(spec):
+            c = surrogate_curve(**params, pressures_mbar=pressures_mbar)
+            paths.append(write_curve(c, params, folder / f"{point_id(params)}.parquet",
+                                     {"surrogate": True}))
+        assemble_space(paths, path, config={"spaces": {name: spec}, "surrogate": True},
+                       name=name)
