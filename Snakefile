@@ -15,7 +15,6 @@
 include: "workflow/rules/common.smk"
 include: "workflow/rules/simulate.smk"
 include: "workflow/rules/space.smk"
-include: "workflow/rules/figures.smk"
 
 
 if "scale_free_space" in config:
@@ -25,7 +24,7 @@ if "scale_free_space" in config:
 
 if "identification" in config:
 
-    include: "workflow/rules/identify.smk"
+    include: "workflow/rules/paper.smk"
 
 
 if "diagnosis" in config:
@@ -37,6 +36,8 @@ if "studies" in config:
 
     include: "workflow/rules/study.smk"
 
+
+include: "workflow/rules/figures.smk"
 
 
 report: "workflow/report/workflow.rst"

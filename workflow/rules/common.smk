@@ -116,7 +116,7 @@ def code_hash(*parts):
 #: The code of an FE job: the model, and the solve and storage of a point or a ray
 #: (not the whole space package: an interpolation change must not rerun 650 solves).
 FE_CODE = ("model", "space/_solve.py", "space/_storage.py", "_files.py", "provenance.py")
-FE_RAY_CODE = (*FE_CODE, "space/_rays.py", "space/_causes.py", "space/_grid.py")
+FE_RAY_CODE = (*FE_CODE, "space/_ray_solve.py", "space/_rays.py", "space/_causes.py", "space/_grid.py")
 #: The code under every reader of a simulated space.
 SPACE_CODE = ("space", "_files.py", "errors.py", "provenance.py")
 

@@ -13,8 +13,8 @@ DG = config["diagnosis"]
 if "scale_free_space" not in config:
     raise _config_error("diagnosis", "needs a scale_free_space section (the space it reads)")
 DG_MEASURED = dict(DG["measured"])
-DG_CODE = code_hash("diagnose", "identify", *SPACE_CODE, "measured.py")
-DG_FIG_CODE = code_hash("diagnose", "identify", "figures", *SPACE_CODE, "measured.py")
+DG_CODE = code_hash("diagnose", "identify", *SPACE_CODE, "measured")
+DG_FIG_CODE = code_hash("paper", "diagnose", "identify", "figures", *SPACE_CODE, "measured")
 
 for _key in ("figure5", "figure6"):
     if DG[_key]["measured"] not in DG_MEASURED:
@@ -123,117 +123,3 @@ rule diagnosis_fe_check:
         "../envs/skinsuction.yaml"
     script:
         "../scripts/diagnosis_fe_check.py"
-
-
-rule fig5_measured_identifications:
-    input:
-        measured=DG_MEASURED[DG["figure5"]["measured"]],
-        space=f"results/simulated_space/{DG['figure5']['space']}.parquet",
-    output:
-        png=report(
-            "results/figures/fig5_measured_identifications.png",
-            caption="../report/fig5.rst",
-            category="Figures",
-            labels={"figure": "5", "format": "png"},
-        ),
-        pdf=report(
-            "results/figures/fig5_measured_identifications.pdf",
-            caption="../report/fig5.rst",
-            category="Figures",
-            labels={"figure": "5", "format": "pdf"},
-        ),
-        table="results/tables/fig5_measured_identifications.csv",
-        runs="results/diagnosis/fig5_runs.csv",
-    log:
-        "logs/figures/fig5_measured_identifications.log",
-    benchmark:
-        "results/benchmarks/figures/fig5_measured_identifications.tsv"
-    params:
-        settings=DG["figure5"],
-        code=DG_FIG_CODE,
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=30,
-    conda:
-        "../envs/skinsuction.yaml"
-    script:
-        "../scripts/fig5_measured_identifications.py"
-
-
-rule fig6_measured_vs_simulated:
-    input:
-        report=f"results/diagnosis/{DG['figure6']['measured']}/report.json",
-        check=f"results/diagnosis/{DG['figure6']['measured']}/fe_check.csv",
-    output:
-        png=report(
-            "results/figures/fig6_measured_vs_simulated.png",
-            caption="../report/fig6.rst",
-            category="Figures",
-            labels={"figure": "6", "format": "png"},
-        ),
-        pdf=report(
-            "results/figures/fig6_measured_vs_simulated.pdf",
-            caption="../report/fig6.rst",
-            category="Figures",
-            labels={"figure": "6", "format": "pdf"},
-        ),
-        table="results/tables/fig6_measured_vs_simulated.csv",
-    log:
-        "logs/figures/fig6_measured_vs_simulated.log",
-    params:
-        code=DG_FIG_CODE,
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=10,
-    conda:
-        "../envs/skinsuction.yaml"
-    script:
-        "../scripts/fig6_measured_vs_simulated.py"
-
-
-if "confusion" in DG:
-    DIAGNOSIS_OUTPUTS += [
-        "results/figures/detectability_map.png",
-        "results/tables/diagnosis_confusion_detectable.csv",
-    ]
-
-    rule detectability_map:
-        """Diagnosis over the physiological domain: confusion matrix and detectability map."""
-        input:
-            spaces=SF_SPACES,
-        output:
-            draws="results/diagnosis/confusion_draws.csv",
-            matrix=report(
-                "results/tables/diagnosis_confusion_detectable.csv",
-                caption="../report/detectability.rst",
-                category="Diagnosis",
-                labels={"table": "confusion matrix (detectable draws)"},
-            ),
-            rates="results/tables/diagnosis_confusion_rates.csv",
-            png=report(
-                "results/figures/detectability_map.png",
-                caption="../report/detectability.rst",
-                category="Diagnosis",
-                labels={"figure": "detectability map"},
-            ),
-            pdf="results/figures/detectability_map.pdf",
-        log:
-            "logs/diagnosis/detectability_map.log",
-        benchmark:
-            "results/benchmarks/diagnosis/detectability_map.tsv"
-        params:
-            per_cause=DG["confusion"]["per_cause"],
-            seed=DG["confusion"].get("seed", 1000),
-            decision=DG.get("decision", {}),
-            fit=DG.get("fit", {}),
-            code=code_hash("diagnose", "identify", "model", "figures", *SPACE_CODE),
-        threads: 1
-        resources:
-            mem_mb=3000,
-            runtime=120,
-        conda:
-            "../envs/skinsuction.yaml"
-        script:
-            "../scripts/detectability_map.py"

@@ -1,4 +1,9 @@
-"""Figures of the paper: rule -> script -> one package function."""
+"""Every figure rule: rule -> thin script -> one package function.
+
+Included last by the Snakefile: a figure rule of a config section exists when
+that section does (scale_free_space, identification, diagnosis), and reads the
+settings its stage file (scale_free.smk, paper.smk, diagnose.smk) validated.
+"""
 
 
 rule fig3_boundary_conditions:
@@ -31,3 +36,318 @@ rule fig3_boundary_conditions:
         "../envs/skinsuction.yaml"
     script:
         "../scripts/fig3_boundary_conditions.py"
+
+
+# ------------------------------------------------------- the scale-free space
+if "scale_free_space" in config:
+
+    rule scale_free_coverage:
+        input:
+            spaces=SF_SPACES,
+        output:
+            table=report(
+                "results/tables/scale_free_coverage.csv",
+                caption="../report/scale_free_coverage.rst",
+                category="Simulated spaces",
+                labels={"space": "scale_free", "table": "coverage frontier"},
+            ),
+            png=report(
+                "results/figures/scale_free_coverage.png",
+                caption="../report/scale_free_coverage.rst",
+                category="Simulated spaces",
+                labels={"space": "scale_free", "figure": "coverage frontier"},
+            ),
+            pdf="results/figures/scale_free_coverage.pdf",
+        log:
+            "logs/scale_free/coverage.log",
+        params:
+            code=code_hash("figures", *SPACE_CODE),
+        threads: 1
+        resources:
+            mem_mb=2000,
+            runtime=10,
+        conda:
+            "../envs/skinsuction.yaml"
+        script:
+            "../scripts/scale_free_coverage.py"
+
+
+# ---------------------------------------------- the paper's identification study
+if "identification" in config:
+
+    rule fig4_single_probe:
+        input:
+            runs="results/identification/single_probe_runs.csv",
+        output:
+            png=report(
+                "results/figures/fig4_single_probe.png",
+                caption="../report/fig4.rst",
+                category="Figures",
+                labels={"figure": "4", "format": "png"},
+            ),
+            pdf=report(
+                "results/figures/fig4_single_probe.pdf",
+                caption="../report/fig4.rst",
+                category="Figures",
+                labels={"figure": "4", "format": "pdf"},
+            ),
+            table=report(
+                "results/tables/fig4_single_probe.csv",
+                caption="../report/fig4.rst",
+                category="Tables",
+                labels={"table": "Figure 4"},
+            ),
+        log:
+            "logs/figures/fig4_single_probe.log",
+        params:
+            target=ID["target"],
+            success_tolerance=ID["success_tolerance"],
+            code=ID_FIG_CODE,
+        threads: 1
+        resources:
+            mem_mb=2000,
+            runtime=10,
+        conda:
+            "../envs/skinsuction.yaml"
+        script:
+            "../scripts/fig4_single_probe.py"
+
+
+    rule fig4b_cost_landscape:
+        input:
+            space=ID_SPACE,
+            curves=ID_CURVES,
+        output:
+            png=report(
+                "results/figures/fig4b_cost_landscape.png",
+                caption="../report/fig4b.rst",
+                category="Figures",
+                labels={"figure": "4b", "format": "png"},
+            ),
+            pdf=report(
+                "results/figures/fig4b_cost_landscape.pdf",
+                caption="../report/fig4b.rst",
+                category="Figures",
+                labels={"figure": "4b", "format": "pdf"},
+            ),
+            table=report(
+                "results/tables/fig4b_cost_landscape.csv",
+                caption="../report/fig4b.rst",
+                category="Tables",
+                labels={"table": "Figure 4b"},
+            ),
+            landscape="results/identification/fig4b_landscape.parquet",
+        log:
+            "logs/figures/fig4b_cost_landscape.log",
+        params:
+            settings=ID,
+            code=ID_FIG_CODE,
+        threads: 1
+        resources:
+            mem_mb=3000,
+            runtime=10,
+        conda:
+            "../envs/skinsuction.yaml"
+        script:
+            "../scripts/fig4b_cost_landscape.py"
+
+
+    rule fig7_alpha:
+        input:
+            runs="results/identification/alpha_sweep_runs.csv",
+        output:
+            png=report(
+                "results/figures/fig7_alpha.png",
+                caption="../report/fig7.rst",
+                category="Figures",
+                labels={"figure": "7", "format": "png"},
+            ),
+            pdf=report(
+                "results/figures/fig7_alpha.pdf",
+                caption="../report/fig7.rst",
+                category="Figures",
+                labels={"figure": "7", "format": "pdf"},
+            ),
+            table=report(
+                "results/tables/fig7_alpha.csv",
+                caption="../report/fig7.rst",
+                category="Tables",
+                labels={"table": "Figure 7"},
+            ),
+            threshold=report(
+                "results/tables/fig7_alpha_threshold.csv",
+                caption="../report/fig7.rst",
+                category="Tables",
+                labels={"table": "Figure 7, alpha threshold"},
+            ),
+        log:
+            "logs/figures/fig7_alpha.log",
+        params:
+            target=ID["target"],
+            success_tolerance=ID["success_tolerance"],
+            code=ID_FIG_CODE,
+        threads: 1
+        resources:
+            mem_mb=2000,
+            runtime=10,
+        conda:
+            "../envs/skinsuction.yaml"
+        script:
+            "../scripts/fig7_alpha.py"
+
+
+    rule fig8_ratio:
+        input:
+            space=ID_SPACE,
+            curves=ID_CURVES,
+            runs="results/identification/ratio_runs.csv",
+        output:
+            png=report(
+                "results/figures/fig8_ratio.png",
+                caption="../report/fig8.rst",
+                category="Figures",
+                labels={"figure": "8", "format": "png"},
+            ),
+            pdf=report(
+                "results/figures/fig8_ratio.pdf",
+                caption="../report/fig8.rst",
+                category="Figures",
+                labels={"figure": "8", "format": "pdf"},
+            ),
+            table=report(
+                "results/tables/fig8_ratio.csv",
+                caption="../report/fig8.rst",
+                category="Tables",
+                labels={"table": "Figure 8"},
+            ),
+            ratio_curves="results/tables/fig8_ratio_curves.csv",
+        log:
+            "logs/figures/fig8_ratio.log",
+        params:
+            settings=ID,
+            code=ID_FIG_CODE,
+        threads: 1
+        resources:
+            mem_mb=2000,
+            runtime=10,
+        conda:
+            "../envs/skinsuction.yaml"
+        script:
+            "../scripts/fig8_ratio.py"
+
+
+# ------------------------------------------------------------- the diagnosis
+if "diagnosis" in config:
+
+    rule fig5_measured_identifications:
+        input:
+            measured=DG_MEASURED[DG["figure5"]["measured"]],
+            space=f"results/simulated_space/{DG['figure5']['space']}.parquet",
+        output:
+            png=report(
+                "results/figures/fig5_measured_identifications.png",
+                caption="../report/fig5.rst",
+                category="Figures",
+                labels={"figure": "5", "format": "png"},
+            ),
+            pdf=report(
+                "results/figures/fig5_measured_identifications.pdf",
+                caption="../report/fig5.rst",
+                category="Figures",
+                labels={"figure": "5", "format": "pdf"},
+            ),
+            table="results/tables/fig5_measured_identifications.csv",
+            runs="results/diagnosis/fig5_runs.csv",
+        log:
+            "logs/figures/fig5_measured_identifications.log",
+        benchmark:
+            "results/benchmarks/figures/fig5_measured_identifications.tsv"
+        params:
+            settings=DG["figure5"],
+            code=DG_FIG_CODE,
+        threads: 1
+        resources:
+            mem_mb=2000,
+            runtime=30,
+        conda:
+            "../envs/skinsuction.yaml"
+        script:
+            "../scripts/fig5_measured_identifications.py"
+
+
+    rule fig6_measured_vs_simulated:
+        input:
+            report=f"results/diagnosis/{DG['figure6']['measured']}/report.json",
+            check=f"results/diagnosis/{DG['figure6']['measured']}/fe_check.csv",
+        output:
+            png=report(
+                "results/figures/fig6_measured_vs_simulated.png",
+                caption="../report/fig6.rst",
+                category="Figures",
+                labels={"figure": "6", "format": "png"},
+            ),
+            pdf=report(
+                "results/figures/fig6_measured_vs_simulated.pdf",
+                caption="../report/fig6.rst",
+                category="Figures",
+                labels={"figure": "6", "format": "pdf"},
+            ),
+            table="results/tables/fig6_measured_vs_simulated.csv",
+        log:
+            "logs/figures/fig6_measured_vs_simulated.log",
+        params:
+            code=DG_FIG_CODE,
+        threads: 1
+        resources:
+            mem_mb=2000,
+            runtime=10,
+        conda:
+            "../envs/skinsuction.yaml"
+        script:
+            "../scripts/fig6_measured_vs_simulated.py"
+
+
+    if "confusion" in DG:
+        DIAGNOSIS_OUTPUTS += [
+            "results/figures/detectability_map.png",
+            "results/tables/diagnosis_confusion_detectable.csv",
+        ]
+
+        rule detectability_map:
+            """Diagnosis over the physiological domain: confusion matrix and detectability map."""
+            input:
+                spaces=SF_SPACES,
+            output:
+                draws="results/diagnosis/confusion_draws.csv",
+                matrix=report(
+                    "results/tables/diagnosis_confusion_detectable.csv",
+                    caption="../report/detectability.rst",
+                    category="Diagnosis",
+                    labels={"table": "confusion matrix (detectable draws)"},
+                ),
+                rates="results/tables/diagnosis_confusion_rates.csv",
+                png=report(
+                    "results/figures/detectability_map.png",
+                    caption="../report/detectability.rst",
+                    category="Diagnosis",
+                    labels={"figure": "detectability map"},
+                ),
+                pdf="results/figures/detectability_map.pdf",
+            log:
+                "logs/diagnosis/detectability_map.log",
+            benchmark:
+                "results/benchmarks/diagnosis/detectability_map.tsv"
+            params:
+                per_cause=DG["confusion"]["per_cause"],
+                seed=DG["confusion"].get("seed", 1000),
+                decision=DG.get("decision", {}),
+                fit=DG.get("fit", {}),
+                code=code_hash("diagnose", "identify", "model", "figures", *SPACE_CODE),
+            threads: 1
+            resources:
+                mem_mb=3000,
+                runtime=120,
+            conda:
+                "../envs/skinsuction.yaml"
+            script:
+                "../scripts/detectability_map.py"

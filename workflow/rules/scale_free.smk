@@ -113,34 +113,3 @@ rule assemble_scale_free_space:
         "../envs/skinsuction.yaml"
     script:
         "../scripts/assemble_scale_free_space.py"
-
-
-rule scale_free_coverage:
-    input:
-        spaces=SF_SPACES,
-    output:
-        table=report(
-            "results/tables/scale_free_coverage.csv",
-            caption="../report/scale_free_coverage.rst",
-            category="Simulated spaces",
-            labels={"space": "scale_free", "table": "coverage frontier"},
-        ),
-        png=report(
-            "results/figures/scale_free_coverage.png",
-            caption="../report/scale_free_coverage.rst",
-            category="Simulated spaces",
-            labels={"space": "scale_free", "figure": "coverage frontier"},
-        ),
-        pdf="results/figures/scale_free_coverage.pdf",
-    log:
-        "logs/scale_free/coverage.log",
-    params:
-        code=code_hash("diagnose", "figures", *SPACE_CODE),
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=10,
-    conda:
-        "../envs/skinsuction.yaml"
-    script:
-        "../scripts/scale_free_coverage.py"

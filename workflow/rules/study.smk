@@ -12,7 +12,7 @@ STUDIES = dict(config["studies"])
 if "scale_free_space" not in config:
     raise _config_error("studies", "needs a scale_free_space section (the space it reads)")
 STUDY_CODE = code_hash(
-    "cohort.py", "identify", "diagnose", "figures", "measured.py", "noise.py", *SPACE_CODE
+    "cohort", "identify", "diagnose", "figures", "measured", "noise.py", *SPACE_CODE
 )
 STUDY_INPUTS = {name: study_files(s["path"]) for name, s in STUDIES.items()}
 STUDY_FIGURES = ["distribution_x1d", "paired_x1d", "causes"]

@@ -14,7 +14,7 @@ deflections at (candidates, pressures).
 Modules: ``_storage`` (point ids, curve files, Parquet with provenance),
 ``_solve`` (FE solves with fallback meshes), ``_grid`` and ``_gridded`` (the
 grid layout), ``_causes`` (the cause coordinates of the scale-free space),
-``_rays`` and ``_ray_interpolate`` (the scale-free layout), ``_interpolate``
+``_rays``, ``_ray_solve`` and ``_ray_interpolate`` (the scale-free layout), ``_interpolate``
 (cubic Lagrange, the NaN policy), ``_open`` (either layout, per probe).
 
 Examples
@@ -52,6 +52,7 @@ from ._gridded import GriddedSpace
 from ._interpolate import LagrangeAxis, SpaceInterpolant, evaluate, interpolate_pressure
 from ._open import DEFAULT_SPACE, LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
+from ._ray_solve import build_ray_spaces, compute_bundle, compute_ray
 from ._rays import (
     BUNDLE_ID_PATTERN,
     EXTRA_KEYWORDS,
@@ -61,10 +62,7 @@ from ._rays import (
     SpaceFileError,
     SpaceMissingError,
     assemble_ray_space,
-    build_ray_spaces,
     bundle_id,
-    compute_bundle,
-    compute_ray,
     coverage_frontier,
     parse_ray_id,
     ray_bundles,

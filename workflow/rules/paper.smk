@@ -1,11 +1,11 @@
-"""Identification study (paper sections 3.2-3.3): Figures 4, 4b, 7, 8 and the tables.
+"""The paper's identification study (sections 3.2-3.3): test curves, runs, tables.
 
 Included by the Snakefile when the configuration has an `identification` section.
 
 space + direct FE runs at the test point -> test curves -> runs of 100
-identifications per case (results/identification/) -> figures and tables.
+identifications per case (results/identification/) -> the timing and optimiser tables here, Figures 4, 4b, 7, 8 in figures.smk.
 Every rule carries the hash of the package code it runs (params.code), so a
-change in identify/ or figures/ reruns exactly the rules that use it.
+change in paper/, identify/ or figures/ reruns exactly the rules that use it.
 """
 
 ID = config["identification"]
@@ -53,8 +53,8 @@ ID_TEST_POINTS = [
     for probe in (2.0, 6.0)
 ]
 ID_CURVES = "results/identification/test_curves.csv"
-ID_CODE = code_hash("identify", *SPACE_CODE, "measured.py")
-ID_FIG_CODE = code_hash("identify", "figures", *SPACE_CODE, "measured.py")
+ID_CODE = code_hash("paper", "identify", *SPACE_CODE, "measured")
+ID_FIG_CODE = code_hash("paper", "identify", "figures", *SPACE_CODE, "measured")
 
 IDENTIFICATION_OUTPUTS = [
     "results/figures/fig4_single_probe.png",
@@ -149,167 +149,6 @@ rule identification_runs:
         "../scripts/identification_runs.py"
 
 
-rule fig4_single_probe:
-    input:
-        runs="results/identification/single_probe_runs.csv",
-    output:
-        png=report(
-            "results/figures/fig4_single_probe.png",
-            caption="../report/fig4.rst",
-            category="Figures",
-            labels={"figure": "4", "format": "png"},
-        ),
-        pdf=report(
-            "results/figures/fig4_single_probe.pdf",
-            caption="../report/fig4.rst",
-            category="Figures",
-            labels={"figure": "4", "format": "pdf"},
-        ),
-        table=report(
-            "results/tables/fig4_single_probe.csv",
-            caption="../report/fig4.rst",
-            category="Tables",
-            labels={"table": "Figure 4"},
-        ),
-    log:
-        "logs/figures/fig4_single_probe.log",
-    params:
-        target=ID["target"],
-        success_tolerance=ID["success_tolerance"],
-        code=ID_FIG_CODE,
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=10,
-    conda:
-        "../envs/skinsuction.yaml"
-    script:
-        "../scripts/fig4_single_probe.py"
-
-
-rule fig4b_cost_landscape:
-    input:
-        space=ID_SPACE,
-        curves=ID_CURVES,
-    output:
-        png=report(
-            "results/figures/fig4b_cost_landscape.png",
-            caption="../report/fig4b.rst",
-            category="Figures",
-            labels={"figure": "4b", "format": "png"},
-        ),
-        pdf=report(
-            "results/figures/fig4b_cost_landscape.pdf",
-            caption="../report/fig4b.rst",
-            category="Figures",
-            labels={"figure": "4b", "format": "pdf"},
-        ),
-        table=report(
-            "results/tables/fig4b_cost_landscape.csv",
-            caption="../report/fig4b.rst",
-            category="Tables",
-            labels={"table": "Figure 4b"},
-        ),
-        landscape="results/identification/fig4b_landscape.parquet",
-    log:
-        "logs/figures/fig4b_cost_landscape.log",
-    params:
-        settings=ID,
-        code=ID_FIG_CODE,
-    threads: 1
-    resources:
-        mem_mb=3000,
-        runtime=10,
-    conda:
-        "../envs/skinsuction.yaml"
-    script:
-        "../scripts/fig4b_cost_landscape.py"
-
-
-rule fig7_alpha:
-    input:
-        runs="results/identification/alpha_sweep_runs.csv",
-    output:
-        png=report(
-            "results/figures/fig7_alpha.png",
-            caption="../report/fig7.rst",
-            category="Figures",
-            labels={"figure": "7", "format": "png"},
-        ),
-        pdf=report(
-            "results/figures/fig7_alpha.pdf",
-            caption="../report/fig7.rst",
-            category="Figures",
-            labels={"figure": "7", "format": "pdf"},
-        ),
-        table=report(
-            "results/tables/fig7_alpha.csv",
-            caption="../report/fig7.rst",
-            category="Tables",
-            labels={"table": "Figure 7"},
-        ),
-        threshold=report(
-            "results/tables/fig7_alpha_threshold.csv",
-            caption="../report/fig7.rst",
-            category="Tables",
-            labels={"table": "Figure 7, alpha threshold"},
-        ),
-    log:
-        "logs/figures/fig7_alpha.log",
-    params:
-        target=ID["target"],
-        success_tolerance=ID["success_tolerance"],
-        code=ID_FIG_CODE,
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=10,
-    conda:
-        "../envs/skinsuction.yaml"
-    script:
-        "../scripts/fig7_alpha.py"
-
-
-rule fig8_ratio:
-    input:
-        space=ID_SPACE,
-        curves=ID_CURVES,
-        runs="results/identification/ratio_runs.csv",
-    output:
-        png=report(
-            "results/figures/fig8_ratio.png",
-            caption="../report/fig8.rst",
-            category="Figures",
-            labels={"figure": "8", "format": "png"},
-        ),
-        pdf=report(
-            "results/figures/fig8_ratio.pdf",
-            caption="../report/fig8.rst",
-            category="Figures",
-            labels={"figure": "8", "format": "pdf"},
-        ),
-        table=report(
-            "results/tables/fig8_ratio.csv",
-            caption="../report/fig8.rst",
-            category="Tables",
-            labels={"table": "Figure 8"},
-        ),
-        ratio_curves="results/tables/fig8_ratio_curves.csv",
-    log:
-        "logs/figures/fig8_ratio.log",
-    params:
-        settings=ID,
-        code=ID_FIG_CODE,
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=10,
-    conda:
-        "../envs/skinsuction.yaml"
-    script:
-        "../scripts/fig8_ratio.py"
-
-
 rule timing_table:
     input:
         space=ID_SPACE,
@@ -360,7 +199,7 @@ rule fe_in_the_loop:
         settings=ID,
         loop=ID["fe_in_the_loop"],
         pressures=ID_LOOP_PRESSURES,
-        code=code_hash("identify", "model", *SPACE_CODE),
+        code=code_hash("paper", "identify", "model", *SPACE_CODE),
     threads: 1
     resources:
         mem_mb=2000,
@@ -436,7 +275,7 @@ if "scale_free_space" in config:
         params:
             settings={k: ID[k] for k in ("target", "bottom", "repeats", "seed", "alpha",
                                          "success_tolerance", "window_focusing")},
-            code=code_hash("identify", "diagnose", "figures", *SPACE_CODE),
+            code=code_hash("paper", "identify", "figures", *SPACE_CODE),
         threads: 1
         resources:
             mem_mb=2000,

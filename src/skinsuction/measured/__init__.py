@@ -1,0 +1,115 @@
+"""Load and check measured suction curves M(p) (CSV files).
+
+File format
+-----------
+UTF-8 text (a byte-order mark is allowed), comma-separated, one header line::
+
+    # subject: S01
+    # site: forearm
+    probe_mm,pressure_mbar,deflection_mm,curve
+    6,0,0.000,A
+    6,2,0.031,A
+    ...
+
+* Columns ``probe_mm`` (aperture diameter, mm), ``pressure_mbar`` (suction,
+  positive, mbar) and ``deflection_mm`` (apex deflection into the aperture, mm)
+  are required; ``curve`` (replicate id, any text) is optional.  No other column
+  is allowed; the order of the columns is free.
+* Lines starting with ``#`` are comments, kept in ``MeasuredData.comments``;
+  ``# key: value`` comments also go to ``MeasuredData.metadata`` (a later key
+  overrides an earlier one).  Blank lines are ignored.
+* One file may hold several probes and several curves per probe.  A curve is
+  the set of rows with the same (``probe_mm``, ``curve``); without a ``curve``
+  column every probe has exactly one curve.  Within a curve the pressures must
+  strictly increase down the file.
+
+Every rejection raises :class:`MeasuredDataError` (a ``ValueError``) with a
+one-line message naming the file, the line (1-based, counting every line of the
+file) and, where it applies, the column.  The checks, in this order:
+
+1. the file can be read and is UTF-8;
+2. header: comma-separated, no missing, unknown or repeated column;
+3. every row: as many fields as the header; numbers in plain decimal notation
+   (``1``, ``-0.5``, ``2e-3``), finite; ``probe_mm > 0``; ``curve`` not empty;
+4. every curve: at least 2 points, pressures strictly increasing (a drop
+   suggests two curves without a ``curve`` column), then the unit rules below;
+5. against the simulated space, if given: the probe diameter is one of
+   ``available_probes`` (to 1e-6 mm); the pressures lie in
+   ``pressure_range_mbar`` (to 1e-9 mbar).
+
+Unit and plausibility rules, per curve (a Cutometer applies at most about
+500 mbar, and a dome cannot rise beyond its aperture):
+
+* pressures below zero: suction must be given as positive mbar (checked first:
+  0, -50, -100 mbar is a sign, not a new curve);
+* largest pressure above 1000 "mbar": looks like Pa (1 mbar = 100 Pa);
+* largest pressure above 0 but at most 1 "mbar": looks like bar or kPa
+  (100 mbar = 0.1 bar = 10 kPa);
+* no pressure above 0: a curve needs suction;
+* largest pressure at most 20 mbar: a *warning* only (``MeasuredData.warnings``):
+  protocols apply 50-500 mbar and the file may be in kPa, but a low-pressure
+  protocol is possible;
+* largest |deflection| above the aperture diameter (or 20 mm): looks like µm;
+* all deflections 0: no dome was measured;
+* largest |deflection| below 1/1000 of the aperture diameter (6 µm under the
+  6 mm probe, 2 µm under the 2 mm one) or 0.001 mm: looks like metres;
+* deflections all <= 0 with some < 0: wrong sign (positive into the aperture);
+* a deflection at 0 mbar above 10 % of the largest and 0.01 mm: the curve must
+  be zeroed there (the instrument zeroes at 0 mbar);
+* a fall of the deflection below an earlier one by more than a quarter of the
+  curve's span and 0.02 mm, or a falling trend: it must grow with the pressure
+  (noise makes only small falls).
+
+Sizes: at most 2 000 points per curve, 2 000 000 lines and 256 MB per file, so
+that a wrong file fails fast instead of filling the memory.
+
+Examples
+--------
+>>> import pathlib, tempfile
+>>> path = pathlib.Path(tempfile.mkdtemp()) / "s01.csv"
+>>> _ = path.write_text("# subject: S01\\nprobe_mm,pressure_mbar,deflection_mm\\n"
+...                     "6,0,0\\n6,50,0.4\\n6,100,0.7\\n", encoding="utf-8")
+>>> data = load_measured(path, available_probes=[2, 6], pressure_range_mbar=(0, 100))
+>>> data.metadata["subject"], data.probes
+('S01', (6.0,))
+>>> data.curve(6).deflection_mm.tolist()
+[0.0, 0.4, 0.7]
+>>> _ = path.write_text("probe_mm,pressure_mbar,deflection_mm\\n6,0,0\\n6,5000,400\\n")
+>>> load_measured(path)  # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+skinsuction.measured.MeasuredDataError: ...s01.csv, line 3, column 'pressure_mbar': largest pressure 5000 mbar looks like Pa, not mbar (1 mbar = 100 Pa; a Cutometer applies at most about 500 mbar)
+"""
+
+from ._checks import (
+    APERTURE_FLOOR,
+    APERTURE_LIMIT,
+    BAR_AT_MOST_MBAR,
+    LOW_PRESSURE_MBAR,
+    M_BELOW_MM,
+    PA_ABOVE_MBAR,
+    UM_ABOVE_MM,
+)
+from ._load import StudyEntry, load_measured, load_table
+from ._types import (
+    MAX_FILE_BYTES,
+    MAX_POINTS_PER_CURVE,
+    MAX_ROWS_PER_FILE,
+    OPTIONAL_COLUMNS,
+    REQUIRED_COLUMNS,
+    MeasuredCurve,
+    MeasuredData,
+    MeasuredDataError,
+)
+
+# the public classes are documented (and shown in tracebacks) under this package
+for _cls in (MeasuredCurve, MeasuredData, MeasuredDataError, StudyEntry):
+    _cls.__module__ = __name__
+del _cls
+
+__all__ = [
+    "MeasuredDataError", "MeasuredCurve", "MeasuredData", "load_measured", "StudyEntry",
+    "load_table", "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS", "MAX_POINTS_PER_CURVE",
+    "MAX_ROWS_PER_FILE", "MAX_FILE_BYTES", "PA_ABOVE_MBAR", "BAR_AT_MOST_MBAR", "UM_ABOVE_MM",
+    "M_BELOW_MM", "APERTURE_LIMIT", "APERTURE_FLOOR", "LOW_PRESSURE_MBAR",
+]
