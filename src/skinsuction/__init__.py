@@ -51,7 +51,7 @@ __all__ = sorted(_EXPORTS) + ["__version__"]
 
 
 #: modules whose ``__all__`` is part of the flat API too (looked up on first use)
-_FLAT_MODULES = ("skinsuction.identify", "skinsuction.measured")
+_FLAT_MODULES = ("skinsuction.identify", "skinsuction.space", "skinsuction.measured")
 
 
 def _find(name):

@@ -41,7 +41,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._gridded import GriddedSpace
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the grid layout imports this module for its interpolant
+    from ._gridded import GriddedSpace
 
 __all__ = ["LagrangeAxis", "SpaceInterpolant", "interpolate_pressure", "evaluate"]
 
@@ -144,6 +147,7 @@ def interpolate_pressure(space: GriddedSpace, pressure_mbar) -> GriddedSpace:
     Examples
     --------
     >>> import numpy as np
+    >>> from skinsuction.space import GriddedSpace
     >>> p = np.arange(0.0, 101.0, 2.0)
     >>> s = GriddedSpace([1.0, 2.0], [1.0, 2.0], p, np.broadcast_to(p**3, (2, 2, 51)), 6)
     >>> float(interpolate_pressure(s, [3.0]).deflection_mm[0, 0, 0])  # 3**3 exactly
@@ -163,7 +167,7 @@ def interpolate_pressure(space: GriddedSpace, pressure_mbar) -> GriddedSpace:
     nodes = space.deflection_mm[..., idx]  # (n1, n2, u, m)
     terms = np.where(w == 0.0, 0.0, w * nodes)  # a zero weight ignores a NaN node
     values = terms.sum(axis=-1)
-    return GriddedSpace(space.x1d, space.x1h, p, values, space.probe_mm)
+    return type(space)(space.x1d, space.x1h, p, values, space.probe_mm)
 
 
 class SpaceInterpolant:
@@ -180,6 +184,7 @@ class SpaceInterpolant:
     Examples
     --------
     >>> import numpy as np
+    >>> from skinsuction.space import GriddedSpace
     >>> x1d, x1h, p = np.linspace(0, 1, 5), np.linspace(0, 2, 6), np.array([1.0, 2.0])
     >>> m = (x1d[:, None, None] ** 3 * x1h[None, :, None] ** 2) * p  # cubic x quadratic
     >>> om = SpaceInterpolant(GriddedSpace(x1d, x1h, p, m, 6))

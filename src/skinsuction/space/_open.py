@@ -184,6 +184,27 @@ def load_space(space_path=DEFAULT_SPACE, bottom: str = "fixed") -> LoadedSpace:
     skinsuction.errors.InputError
         Naming the path when it is missing, unreadable, of another bottom
         condition or not a usable grid.
+
+    Examples
+    --------
+    A grid space filled by the analytic surrogate (no FE), read back:
+
+    >>> import pathlib, tempfile
+    >>> from skinsuction.identify import write_surrogate_space
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "tiny.parquet"
+    >>> write_surrogate_space(path, [0.01, 0.02, 0.03, 0.04], [1e-4, 2e-4, 3e-4, 4e-4],
+    ...                       [0.0, 50.0, 100.0])
+    >>> space = load_space(path)
+    >>> sorted(space.spaces), space.probe(6).layout, space.pressure_range([2, 6])
+    ([2.0, 6.0], 'grid', (0.0, 100.0))
+    >>> s6 = space.probe(6)
+    >>> m = s6.interpolant_at([100.0])(s6.from_moduli([[0.02, 2e-4]]))
+    >>> m.shape
+    (1, 1)
+    >>> load_space(path.with_name("missing.parquet"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    skinsuction.errors.InputError: ...missing.parquet: simulated space not found ...
     """
     spaces, space_meta, p_range = _read_space(space_path, bottom)
     sp = Path(space_path)
