@@ -179,6 +179,38 @@ def test_a_target_outside_its_space_and_a_yaml_syntax_error_are_named(tmp_path):
     assert code != 0 and f"config.yaml, line {line + 2}" in out and "not valid YAML" in out
 
 
+def _check_config(cwd, *args):
+    res = subprocess.run([sys.executable, "-m", "skinsuction", "check-config", *args], cwd=cwd,
+                         capture_output=True, text=True, timeout=120)
+    return res.returncode, res.stdout + res.stderr
+
+
+def test_check_config_names_the_line_of_a_users_configfile(tmp_path):
+    # Snakemake reads a --configfile before the workflow and names no line: the
+    # command does, and names a bad key as the workflow does
+    bad = tmp_path / "mine.yaml"
+    bad.write_text("mesh:\n  refinement: 1\nspaces:\n  paper: {x1d: [0.1, 0.2\n  other: 1\n")
+    code, out = _check_config(ROOT, str(bad))
+    assert code == 2, out
+    assert re.search(r"mine\.yaml, line 5, column \d+: not valid YAML", out), out
+    assert "Traceback" not in out
+    code, dry = _dry_run(ROOT, "--configfile", str(bad))
+    assert code != 0 and "not valid JSON or YAML" in dry  # Snakemake's own, unlocated
+
+    bad.write_text("mesh:\n  refinement: 1.5\n")
+    code, out = _check_config(ROOT, str(bad))
+    assert code == 2 and "'mesh.refinement'" in out and "over config/config.yaml" in out, out
+    code, out = _check_config(ROOT, str(bad), "--no-base")
+    assert code == 2 and "'<top level>'" in out and "required" in out, out
+    bad.write_text("- a list\n")
+    code, out = _check_config(ROOT, str(bad))
+    assert code == 2 and "a mapping of keys" in out, out
+
+    for args in (["config/ci.yaml"], ["config/ci.yaml", "--no-base"], ["config/config.yaml"]):
+        code, out = _check_config(ROOT, *args)
+        assert code == 0 and "a valid configuration" in out, (args, out)
+
+
 def _pins(lines):
     pins = {}
     for line in lines:

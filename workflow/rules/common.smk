@@ -20,31 +20,24 @@ os.environ.update(
     PYTHONPATH=os.pathsep.join(p for p in (str(SRC), os.environ.get("PYTHONPATH")) if p)
 )
 
+from skinsuction.config import key_error, read_config  # noqa: E402
+from skinsuction.errors import InputError  # noqa: E402
 from skinsuction.provenance import source_hash  # noqa: E402
 from skinsuction.space import POINT_ID_PATTERN, expand_axis, grid_points, point_id  # noqa: E402
 
 
 # ---------------------------------------------------------------- configuration
-def _check_yaml(path):
-    """A YAML syntax error of a config file, with its file, line and column."""
-    import yaml
-
-    try:
-        yaml.safe_load(Path(path).read_text(encoding="utf-8"))
-    except yaml.YAMLError as err:
-        mark = getattr(err, "problem_mark", None)
-        where = f", line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(err, "problem", None) or str(err)
-        raise WorkflowError(f"{path}{where}: not valid YAML ({' '.join(str(problem).split())})")
-
-
 def _config_error(key, err):
     return WorkflowError(f"Invalid configuration value for '{key}': {err}")
 
 
 # the default config is read here, after a syntax check that names the line (Snakemake's
-# own message names neither file nor line); a --configfile is read by Snakemake first
-_check_yaml(Path(workflow.basedir) / "config" / "config.yaml")
+# own message names neither file nor line); a --configfile is read by Snakemake first:
+# `skinsuction check-config FILE` (or `snakemake --verbose`) names its line
+try:
+    read_config(Path(workflow.basedir) / "config" / "config.yaml")
+except InputError as _err:
+    raise WorkflowError(str(_err))
 
 
 configfile: "config/config.yaml"
@@ -56,12 +49,7 @@ except WorkflowError as err:
     # name the offending key in the first line, e.g. 'mesh.refinement'
     _cause = err.__cause__ or err.__context__
     if hasattr(_cause, "absolute_path") and hasattr(_cause, "message"):
-        _key = ".".join(map(str, _cause.absolute_path)) or "<top level>"
-        _msg = _cause.message
-        if _cause.context:  # oneOf: say what the deepest-matching alternative objects to
-            _best = max(_cause.context, key=lambda e: len(e.relative_path))
-            _msg += f" (e.g. {_best.message})"
-        raise _config_error(_key, _msg) from err
+        raise _config_error(*key_error(_cause)) from err
     raise
 
 
