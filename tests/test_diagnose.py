@@ -480,16 +480,6 @@ def test_a_fit_at_a_stopped_ray_is_flagged_as_the_coverage_frontier():
     assert flags[0]["side"] == "lower"
 
 
-def test_new_modules_examples_run():
-    import doctest
-
-    from skinsuction.diagnose import _causes, _rays
-    from skinsuction.identify import _bounds, _polish
-
-    for module in (_bounds, _causes, _polish, _rays):
-        assert doctest.testmod(module).failed == 0, module.__name__
-
-
 @pytest.mark.parametrize("noise_um", [None, 2.0])
 def test_a_short_curve_is_a_located_input_error(noise_um, tmp_path):
     from skinsuction.diagnose import Settings, diagnose

@@ -29,6 +29,16 @@ def test_every_module_is_listed():
         assert name in MODULES
 
 
+@pytest.mark.parametrize("name", ["skinsuction.model._geometry", "skinsuction.model._material",
+                                  "skinsuction.model._probe", "skinsuction.model._simulate",
+                                  "skinsuction.space", "skinsuction.identify",
+                                  "skinsuction.measured", "skinsuction.paper"])
+def test_the_main_modules_have_examples(name):
+    finder = doctest.DocTestFinder()
+    examples = sum(len(t.examples) for t in finder.find(importlib.import_module(name)))
+    assert examples > 0, f"{name} shows no example"
+
+
 @pytest.mark.parametrize("name", MODULES)
 def test_examples(name, tmp_path, monkeypatch):
     import matplotlib.pyplot as plt

@@ -233,11 +233,3 @@ def test_pre_tension_stiffens_the_response():
     assert M[0] > M[1] > M[2]
 
 
-@pytest.mark.parametrize("name", ["_geometry", "_material", "_probe", "_simulate"])
-def test_docstring_examples(name):
-    import doctest
-    import importlib
-
-    module = importlib.import_module(f"skinsuction.model.{name}")
-    result = doctest.testmod(module)
-    assert result.attempted > 0 and result.failed == 0

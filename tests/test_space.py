@@ -1,7 +1,6 @@
 """Simulated-space database: grid axes, point ids, curve files, assembly, grid()."""
 
 import dataclasses
-import doctest
 import json
 import sys
 import types
@@ -477,12 +476,6 @@ def test_provenance_record_is_json(tmp_path):
     assert json.loads(json.dumps(rec))["config"] == {"a": 1.5, "b": [1, 2]}
     assert rec["extra"] == [0, 1]
     assert provenance.git_info(tmp_path) == {"commit": None, "dirty": None, "root": None}
-
-
-@pytest.mark.parametrize("module", [space, provenance])
-def test_docstring_examples(module):
-    result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
-    assert result.failed == 0
 
 
 def test_flat_public_api():
