@@ -82,7 +82,7 @@ def main(argv=None):
             curves["fe"][p] = (s.pressure_mbar[ok], np.asarray(c.deflection_mm)[ok])
             print(f"FE test curve {p:g} mm: {time.perf_counter() - t0:.1f} s, mesh {mesh}, "
                   f"converged={c.converged}")
-    setup = StudySetup(spaces, curves)
+    setup = StudySetup(spaces, curves, TARGET)
     cols = ["source", "objective", "x1d_error_mean_pct", "x1h_error_mean_pct",
             "x1d_error_max_pct", "x1h_error_max_pct", "success_fraction", "iterations_median"]
 

@@ -367,7 +367,7 @@ def test_compare_spaces_runs_every_objective_with_and_without_polish():
     # a curve between grid nodes: the window focusing alone stops short of it
     truth = [0.0055, 0.00041]
     curves = {"fe": {p: (s[p].pressure_mbar, evaluate(s[p], [truth])[0]) for p in s}}
-    runs, summary = compare_spaces({"surrogate": StudySetup(s, curves)}, repeats=4, seed=1)
+    runs, summary = compare_spaces({"surrogate": StudySetup(s, curves, truth)}, repeats=4, seed=1)
     assert len(runs) == 4 * 4 * 2
     assert set(summary["method"]) == {"window focusing", "window focusing + polish"}
     by = summary.set_index(["objective", "method"])

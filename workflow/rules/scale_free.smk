@@ -14,12 +14,13 @@ law M(s X1d, s X1h, s X2d, s p) = M(X1d, X1h, X2d, p) makes it cover every X1d
 the neo-Hookean rays: the same jobs.
 """
 
-from skinsuction.space import BASELINE, registry_from_config  # noqa: E402
 from skinsuction.space import (  # noqa: E402
+    BASELINE,
     BUNDLE_ID_PATTERN,
     RaySpec,
     bundle_id,
     ray_bundles,
+    registry_from_config,
 )
 
 SF = config["scale_free_space"]

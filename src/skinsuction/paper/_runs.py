@@ -282,7 +282,7 @@ def compare_spaces(setups: dict, *, objectives=tuple(OBJECTIVES), repeats=100, s
     method): median errors in % of the truth, the success rate (both moduli within
     ``success_tolerance``), iterations and milliseconds per identification.
     """
-    from ._polish import polish
+    from skinsuction.identify import polish
 
     frames = []
     for name, setup in setups.items():

@@ -31,7 +31,7 @@ def timing_study(setup: StudySetup, *, repeats=100, seed=0, alpha=0.5, sources=N
     measured pressures).  Returns ``(runs, table)``; the table puts the paper's
     numbers (section 3.3.1) next to ours.
     """
-    from ._window_focusing import window_focusing
+    from skinsuction.identify import window_focusing
 
     frames = []
     for source in sources or setup.sources:
@@ -137,7 +137,7 @@ def optimiser_comparison(setup: StudySetup, *, objectives=("single_6mm",), sourc
 
     Returns ``(runs_frame, table)``.
     """
-    from ._window_focusing import window_focusing
+    from skinsuction.identify import window_focusing
 
     rows = []
     ref_rows = {}

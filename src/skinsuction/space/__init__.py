@@ -12,10 +12,11 @@ every X1d and every pressure protocol (:class:`RaySpace`,
 deflections at (candidates, pressures).
 
 Modules: ``_storage`` (point ids, curve files, Parquet with provenance),
-``_solve`` (FE solves with fallback meshes), ``_grid`` and ``_gridded`` (the
-grid layout), ``_causes`` (the cause coordinates of the scale-free space),
-``_rays``, ``_ray_solve`` and ``_ray_interpolate`` (the scale-free layout), ``_interpolate``
-(cubic Lagrange, the NaN policy), ``_open`` (either layout, per probe).
+``_solve`` (FE solves with fallback meshes), ``_grid`` (the grid layout's
+database), ``_interpolate`` (a grid of one probe, :class:`GriddedSpace`, and
+cubic Lagrange with its NaN policy), ``_causes`` (the cause coordinates of the
+scale-free space), ``_rays``, ``_ray_solve`` and ``_ray_interpolate`` (the
+scale-free layout), ``_open`` (either layout, per probe).
 
 Examples
 --------
@@ -48,8 +49,13 @@ from ._grid import (
     grid_points,
     read_space,
 )
-from ._gridded import GriddedSpace
-from ._interpolate import LagrangeAxis, SpaceInterpolant, evaluate, interpolate_pressure
+from ._interpolate import (
+    GriddedSpace,
+    LagrangeAxis,
+    SpaceInterpolant,
+    evaluate,
+    interpolate_pressure,
+)
 from ._open import DEFAULT_SPACE, LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
 from ._ray_solve import build_ray_spaces, compute_bundle, compute_ray

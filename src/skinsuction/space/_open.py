@@ -18,7 +18,7 @@ from skinsuction.errors import InputError
 
 from ._causes import BASELINE
 from ._grid import read_space
-from ._gridded import GriddedSpace
+from ._interpolate import GriddedSpace
 from ._ray_interpolate import NeoHookeanSlice
 from ._rays import read_ray_space, read_ray_spaces
 

@@ -14,8 +14,7 @@ import math
 
 import numpy as np
 
-from ._gridded import GriddedSpace
-from ._interpolate import LagrangeAxis, SpaceInterpolant, _numerators
+from ._interpolate import GriddedSpace, LagrangeAxis, SpaceInterpolant, _numerators
 from ._rays import RaySpace
 
 __all__ = ["RayInterpolant", "NeoHookeanSlice", "TabulatedInterpolant"]
