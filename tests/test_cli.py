@@ -65,7 +65,8 @@ def test_identify_help(capsys):
 def test_commands_registry_is_the_parser():
     parser = cli.build_parser()
     sub = next(a for a in parser._actions if a.dest == "command")
-    assert set(sub.choices) == set(cli.COMMANDS) == {"simulate", "identify", "diagnose", "study"}
+    assert set(sub.choices) == set(cli.COMMANDS) == {"simulate", "identify", "diagnose", "study",
+                                                      "check-config"}
 
 
 # ------------------------------------------------------------------ simulate
