@@ -139,18 +139,18 @@ def fake_fe(calls):
 
 def test_fe_in_the_loop_finds_the_truth_and_counts_solves():
     calls = []
-    r = fe_in_the_loop(bounds=([0.001, 1e-5], [0.091, 2.01e-3]), max_fe_solves=80,
+    r = fe_in_the_loop(target=TARGET, bounds=([0.001, 1e-5], [0.091, 2.01e-3]), max_fe_solves=80,
                        simulate=fake_fe(calls), seed=0)
     assert r["success"] and np.allclose(r["estimate"], TARGET, rtol=1e-3)
     assert r["fe_solves"] == len(calls) - 1 == len(r["history"])  # -1: the target curve
     json.dumps(r)
-    capped = fe_in_the_loop(bounds=([0.001, 1e-5], [0.091, 2.01e-3]), max_fe_solves=3,
+    capped = fe_in_the_loop(target=TARGET, bounds=([0.001, 1e-5], [0.091, 2.01e-3]), max_fe_solves=3,
                             simulate=fake_fe([]), seed=0)
     assert capped["fe_solves"] == 3 and "cap of 3" in capped["message"]
 
 
 def test_optimiser_comparison_table(setup):
-    loop = fe_in_the_loop(bounds=([0.001, 1e-5], [0.091, 2.01e-3]), max_fe_solves=40,
+    loop = fe_in_the_loop(target=TARGET, bounds=([0.001, 1e-5], [0.091, 2.01e-3]), max_fe_solves=40,
                           simulate=fake_fe([]), seed=0)
     runs, table = optimiser_comparison(setup, sources=["space"], runs=2,
                                        least_squares_starts=2, de_runs=1, fe_loop=loop)
