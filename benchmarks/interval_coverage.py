@@ -82,7 +82,14 @@ def main(argv=None):
                     help="fe: direct FE runs (the benchmark); space: the interpolated space's "
                          "own curves at the truth (separates the interval method from the "
                          "error of the space)")
+    ap.add_argument("--uncorrelated", action="store_true",
+                    help="leave out the correlated space-error term of the likelihood "
+                         "(SPACE_ERROR_RMS), for comparison")
     args = ap.parse_args(argv)
+    if args.uncorrelated:
+        from skinsuction.identify import measured_fit
+
+        measured_fit.SPACE_ERROR_CORRELATED = False
 
     space = load_space(args.space)
     spec = space.probe(6.0).space.spec
