@@ -300,6 +300,16 @@ def interpolate_pressure(space: GriddedSpace, pressure_mbar) -> GriddedSpace:
     return GriddedSpace(space.x1d, space.x1h, p, values, space.probe_mm)
 
 
+#: Fewer candidates per stencil position than this on average: gather each
+#: candidate's stencil (one small product per candidate, in blocks of
+#: GATHER_BLOCK) rather than one product per position.  Measured on the default
+#: scale-free space: 0.7 against 1.2 µs per candidate for a profile scan (1 061
+#: positions for 5 002 candidates), 0.33 against 0.53 µs the other way for a
+#: window-focusing window (20 positions for 1 000).
+GATHER_BELOW = 8
+GATHER_BLOCK = 64
+
+
 class SpaceInterpolant:
     """Omega_s(X1d, X1h) at fixed pressures, for many candidates at once.
 
@@ -418,8 +428,15 @@ class SpaceInterpolant:
         # group the candidates by stencil position, one product per group
         order = np.argsort(key, kind="stable")
         sorted_key = key[order]
-        sorted_basis = basis[order]
         cuts = np.flatnonzero(sorted_key[1:] != sorted_key[:-1]) + 1
+        if cuts.size + 1 > n // GATHER_BELOW:
+            # spread candidates (a profile scans the whole space): few per stencil, so
+            # gather each candidate's stencil instead, in cache-sized blocks
+            for a in range(0, n, GATHER_BLOCK):
+                b = min(n, a + GATHER_BLOCK)
+                np.matmul(basis[a:b, None, :], self._stencils[key[a:b]], out=out[a:b, None, :])
+            return out
+        sorted_basis = basis[order]
         edges = np.concatenate(([0], cuts, [n]))
         scratch = self._scratch(n)
         for a, b in zip(edges[:-1].tolist(), edges[1:].tolist()):
