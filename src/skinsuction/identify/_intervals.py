@@ -302,38 +302,65 @@ class _Profile2D:
 
     def __call__(self, us):
         """(profile chi2, argmin theta) at each u of ``us``."""
+        return _profiles([(self, us)])[0]
+
+
+def _profiles(items):
+    """[(profile chi2, argmin theta)] of several ``(_Profile2D, us)`` in one pass.
+
+    Every u is minimised over w on its own (a scan of PROFILE_W points, then
+    ZOOM_ROUNDS zooms), so the profiles of several parameters share each call
+    of the residuals: half the calls for two parameters, the same numbers.
+    """
+    rows_c, rows_w, lo_all, hi_all, u_all, owner = [], [], [], [], [], []
+    results = []
+    for k, (prof, us) in enumerate(items):
         us = np.atleast_1d(np.asarray(us, dtype=float))
-        out, best_theta = np.full(us.size, np.inf), np.full((us.size, 2), np.nan)
+        out, best = np.full(us.size, np.inf), np.full((us.size, 2), np.nan)
+        results.append((out, best))
         lo_w, hi_w = np.empty(us.size), np.empty(us.size)
-        for k, u in enumerate(us):
-            lo_w[k], hi_w[k] = _line_range(u * self.c, self.w_dir, self.lower, self.upper)
-        ok = hi_w >= lo_w
-        if not ok.any():
-            return out, best_theta
-        u, lo, hi = us[ok], lo_w[ok], hi_w[ok]
-        frac = np.linspace(0.0, 1.0, PROFILE_W)
-        w = lo[:, None] + (hi - lo)[:, None] * frac[None, :]
-        cell = (hi - lo) / (PROFILE_W - 1)
-        for rnd in range(ZOOM_ROUNDS + 1):
-            theta = u[:, None, None] * self.c + w[:, :, None] * self.w_dir
-            theta = np.clip(theta, self.lower, self.upper)
-            chi2 = _chi2(self.residuals, theta.reshape(-1, 2), self.n).reshape(w.shape)
-            self.evaluations += chi2.size
-            j = np.argmin(chi2, axis=1)
-            w_best = w[np.arange(w.shape[0]), j]
-            c_best = chi2[np.arange(w.shape[0]), j]
-            if rnd == ZOOM_ROUNDS:
-                break
-            # zoom around the best point: two cells either side first (a valley narrower
-            # than a cell may sit beside the best point), then one
-            reach = 2.0 if rnd == 0 else 1.0
-            step = np.linspace(-reach, reach, ZOOM_POINTS)
-            w = np.clip(w_best[:, None] + cell[:, None] * step[None, :], lo[:, None], hi[:, None])
-            cell = cell * 2.0 * reach / (ZOOM_POINTS - 1)
-        out[ok] = c_best
-        best_theta[ok] = np.clip(u[:, None] * self.c + w_best[:, None] * self.w_dir,
-                                 self.lower, self.upper)
-        return out, best_theta
+        for j, u in enumerate(us):
+            lo_w[j], hi_w[j] = _line_range(u * prof.c, prof.w_dir, prof.lower, prof.upper)
+        ok = np.flatnonzero(hi_w >= lo_w)
+        for j in ok:
+            rows_c.append(prof.c)
+            rows_w.append(prof.w_dir)
+            lo_all.append(lo_w[j])
+            hi_all.append(hi_w[j])
+            u_all.append(us[j])
+            owner.append((k, j))
+    if not owner:
+        return results
+    c, wd = np.array(rows_c), np.array(rows_w)
+    lo, hi, u = np.array(lo_all), np.array(hi_all), np.array(u_all)
+    lower = np.array([items[k][0].lower for k, _ in owner])
+    upper = np.array([items[k][0].upper for k, _ in owner])
+    prof0 = items[0][0]
+    frac = np.linspace(0.0, 1.0, PROFILE_W)
+    w = lo[:, None] + (hi - lo)[:, None] * frac[None, :]
+    cell = (hi - lo) / (PROFILE_W - 1)
+    rows = np.arange(u.size)
+    for rnd in range(ZOOM_ROUNDS + 1):
+        theta = u[:, None, None] * c[:, None, :] + w[:, :, None] * wd[:, None, :]
+        theta = np.clip(theta, lower[:, None, :], upper[:, None, :])
+        chi2 = _chi2(prof0.residuals, theta.reshape(-1, 2), prof0.n).reshape(w.shape)
+        for k, (prof, _) in enumerate(items):
+            prof.evaluations += int(sum(1 for kk, _ in owner if kk == k)) * w.shape[1]
+        j = np.argmin(chi2, axis=1)
+        w_best, c_best = w[rows, j], chi2[rows, j]
+        if rnd == ZOOM_ROUNDS:
+            break
+        # zoom around the best point: two cells either side first (a valley narrower
+        # than a cell may sit beside the best point), then one
+        reach = 2.0 if rnd == 0 else 1.0
+        step = np.linspace(-reach, reach, ZOOM_POINTS)
+        w = np.clip(w_best[:, None] + cell[:, None] * step[None, :], lo[:, None], hi[:, None])
+        cell = cell * 2.0 * reach / (ZOOM_POINTS - 1)
+    best_theta = np.clip(u[:, None] * c + w_best[:, None] * wd, lower, upper)
+    for r, (k, jj) in enumerate(owner):
+        results[k][0][jj] = c_best[r]
+        results[k][1][jj] = best_theta[r]
+    return results
 
 
 def _profile_2d_intervals(residuals, theta, lower, upper, parameters, G, n, chi2_hat, level,
@@ -347,14 +374,16 @@ def _profile_2d_intervals(residuals, theta, lower, upper, parameters, G, n, chi2
     each end is placed by bisection between the last value inside and the first
     outside the region.
     """
-    profiles, scans = {}, {}
+    profiles, grids = {}, {}
     for k, name in enumerate(parameters):
         c = G[k] if np.abs(G[k]).max() > 0 else np.eye(2)[k]
         prof = _Profile2D(residuals, n, c, lower, upper)
         u_hat = float(theta @ prof.c)
-        us = np.union1d(np.linspace(*prof.u_range, PROFILE_U), [u_hat])
-        values, thetas = prof(us)
-        profiles[name], scans[name] = prof, (us, values, thetas)
+        profiles[name] = prof
+        grids[name] = np.union1d(np.linspace(*prof.u_range, PROFILE_U), [u_hat])
+    # every parameter's scan in the same calls of the residuals
+    scanned = _profiles([(profiles[name], grids[name]) for name in parameters])
+    scans = {name: (grids[name], v, th) for name, (v, th) in zip(parameters, scanned)}
     finite = [v[np.isfinite(v)] for _, v, _ in scans.values()]
     chi2_min = min([chi2_hat] + [float(v.min()) for v in finite if v.size])
     if not math.isfinite(chi2_min):
@@ -366,8 +395,11 @@ def _profile_2d_intervals(residuals, theta, lower, upper, parameters, G, n, chi2
     dof = max(n - 2, 1)
     scale = _misfit_scale(chi2_min, dof, noise_dof) if scale_misfit else 1.0
     limit = chi2_min + interval_threshold(level, noise_dof) * scale
-    intervals, total = {}, 0
-    for k, (name, g) in enumerate(parameters.items()):
+    # each end of each interval: bisection between the last scan value inside the
+    # region (a) and the first outside (b); every end of every parameter moves in the
+    # same vectorised profile call per step
+    ends, brackets = {}, {}
+    for name in parameters:
         prof = profiles[name]
         us, values, thetas = scans[name]
         inside = np.flatnonzero(values <= limit)
@@ -375,39 +407,42 @@ def _profile_2d_intervals(residuals, theta, lower, upper, parameters, G, n, chi2
         if inside.size == 0:  # the region is narrower than the scan: start at the fit
             i_hat = int(np.argmin(np.abs(us - u_hat)))
             inside = np.array([i_hat])
-        # both ends at once: bisection between the last scan value inside the region
-        # (a) and the first outside (b), one vectorised profile call per step
-        ends, brackets = [None, None], {}
+        ends[name], brackets[name] = [None, None], {}
         for side, (i_end, step) in enumerate(((int(inside.min()), -1),
                                               (int(inside.max()), +1))):
             j = i_end + step
             if j < 0 or j >= us.size:  # inside up to the edge of the space
-                ends[side] = (thetas[i_end], True)
+                ends[name][side] = (thetas[i_end], True)
             else:
-                brackets[side] = [us[i_end], us[j], thetas[i_end]]
-        for _ in range(BISECTIONS if brackets else 0):
-            sides = list(brackets)
-            mids = np.array([0.5 * (brackets[s][0] + brackets[s][1]) for s in sides])
-            v, t = prof(mids)
-            for s, mid, vs, ts in zip(sides, mids, v, t):
+                brackets[name][side] = [us[i_end], us[j], thetas[i_end]]
+    open_names = [name for name in parameters if brackets[name]]
+    for _ in range(BISECTIONS if open_names else 0):
+        mids = {name: np.array([0.5 * (b[0] + b[1]) for b in brackets[name].values()])
+                for name in open_names}
+        found = _profiles([(profiles[name], mids[name]) for name in open_names])
+        for name, (v, t) in zip(open_names, found):
+            for s, mid, vs, ts in zip(list(brackets[name]), mids[name], v, t):
                 if vs <= limit:
-                    brackets[s][0], brackets[s][2] = mid, ts
+                    brackets[name][s][0], brackets[name][s][2] = mid, ts
                 else:
-                    brackets[s][1] = mid
-        for s, (_, _, theta_a) in brackets.items():
-            ends[s] = (theta_a, False)
+                    brackets[name][s][1] = mid
+    intervals, total = {}, 0
+    for k, (name, g) in enumerate(parameters.items()):
+        prof = profiles[name]
+        for s, (_, _, theta_a) in brackets[name].items():
+            ends[name][s] = (theta_a, False)
         total += prof.evaluations
         # an end is also open where its best fit sits on an edge of the space along an
         # axis the parameter depends on (X1h of a 2 mm curve stops at the ratio's end)
         axes_of = np.abs(G[k]) > 1e-9 * np.abs(G[k]).max()
         tol = 1e-6 * (upper - lower)
-        ends = [(t, is_open or bool(np.any(((t <= lower + tol) | (t >= upper - tol))[axes_of])))
-                for t, is_open in ends]
-        pts = np.array([ends[0][0], ends[1][0], theta])
+        pair = [(t, is_open or bool(np.any(((t <= lower + tol) | (t >= upper - tol))[axes_of])))
+                for t, is_open in ends[name]]
+        pts = np.array([pair[0][0], pair[1][0], theta])
         vals = np.asarray(g(pts), dtype=float)
         est = float(vals[2])
         lo_i, hi_i = (0, 1) if vals[0] <= vals[1] else (1, 0)
-        lower_open, upper_open = ends[lo_i][1], ends[hi_i][1]
+        lower_open, upper_open = pair[lo_i][1], pair[hi_i][1]
         intervals[name] = Interval(est, float(min(vals[lo_i], est)), float(max(vals[hi_i], est)),
                                    bool(lower_open), bool(upper_open))
     return intervals, chi2_min, limit, scale, total, notes

@@ -392,7 +392,8 @@ def _space_error_direction(probe_mm, pressure_mbar, measured_mm, x1d_mpa, sd):
 def _decorrelate(z, direction, gamma):
     if direction is None:
         return z
-    return z - gamma * (z @ direction)[:, None] * direction[None, :]
+    # einsum, not @: a matrix-vector product of many rows would start BLAS threads
+    return z - gamma * np.einsum("nt,t->n", z, direction)[:, None] * direction[None, :]
 
 
 def _likelihood_residuals(obj, objective, curves, sigma_mm, model_error=MODEL_ERROR_RELATIVE,
