@@ -167,7 +167,30 @@ def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_
     """Identify (X1d, X1h) of loaded curves (:class:`skinsuction.measured.MeasuredData`).
 
     The work of :func:`identify_measured` once the file and the space are read
-    (parameters and result as there; ``input.sha256`` is left None).
+    (parameters and result as there; ``input.sha256`` is left None).  A study
+    reads the space once (:func:`skinsuction.space.load_space`) and calls this
+    for every measurement.
+
+    Examples
+    --------
+    Both probes of a noisy curve of the analytic surrogate (a stand-in for the
+    FE space), with the 95 % intervals from a given noise level:
+
+    >>> import numpy as np
+    >>> from skinsuction.identify import analytic_surrogate_space
+    >>> from skinsuction.measured import MeasuredCurve, MeasuredData
+    >>> from skinsuction.space import LoadedSpace, evaluate
+    >>> spaces = {p: analytic_surrogate_space(p) for p in (2.0, 6.0)}
+    >>> rng = np.random.default_rng(0)
+    >>> curves = []
+    >>> for p, s in spaces.items():
+    ...     m = evaluate(s, [[0.03, 0.0005]])[0] + rng.normal(0, 1e-3, s.pressure_mbar.size)
+    ...     curves.append(MeasuredCurve(p, s.pressure_mbar, m))
+    >>> r = identify_data(MeasuredData("example", tuple(curves)), LoadedSpace.given(spaces),
+    ...                   objective="weighted", repeats=2, noise_um=1.0)
+    >>> iv = r["intervals"]["X1d"]
+    >>> bool(iv["lower"] < 0.03 < iv["upper"]), iv["lower_open"] or iv["upper_open"]
+    (True, False)
     """
     from skinsuction import __version__
 
