@@ -372,18 +372,48 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
     reports : bool
         Also write the identification and diagnosis files of each measurement.
     space, ray_spaces : optional
-        A :class:`skinsuction.identify.measured_fit.LoadedSpace` and the ray
-        spaces ``{name: RaySpace}`` instead of reading ``space_dir`` (tests,
-        notebooks).
+        A :class:`skinsuction.space.LoadedSpace` and the ray spaces
+        ``{name: RaySpace}`` instead of reading ``space_dir`` (tests, notebooks).
 
     Returns
     -------
     dict
         Paths written, counts and timings.
+
+    Examples
+    --------
+    Two subjects, two visits each, identified (not diagnosed) on a small grid
+    space filled by the analytic surrogate; the third file is broken and
+    becomes a row with its error:
+
+    >>> import pathlib, tempfile
+    >>> import pandas as pd
+    >>> from skinsuction.identify import surrogate_deflection, write_surrogate_space
+    >>> root = pathlib.Path(tempfile.mkdtemp())
+    >>> p = [0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 90.0, 100.0]
+    >>> write_surrogate_space(root / "space.parquet", [0.01, 0.02, 0.03, 0.04, 0.05],
+    ...                       [1e-4, 3e-4, 5e-4, 7e-4, 9e-4], p)
+    >>> (root / "study").mkdir()
+    >>> for subject, x1d in (("S1", 0.025), ("S2", 0.035)):
+    ...     for visit, f in ((1, 1.0), (2, 1.2)):
+    ...         m = surrogate_deflection(x1d * f, 5e-4, p, 6.0)
+    ...         text = f"# subject: {subject}\\n# visit: {visit}\\nprobe_mm,pressure_mbar,deflection_mm\\n"
+    ...         text += "".join(f"6,{a:g},{b:.6f}\\n" for a, b in zip(p, m))
+    ...         _ = (root / "study" / f"{subject}_v{visit}.csv").write_text(text)
+    >>> _ = (root / "study" / "S3_v1.csv").write_text("probe_mm;pressure_mbar\\n")
+    >>> r = run_study(root / "study", root / "out", space_dir=root / "space.parquet",
+    ...               diagnose=False, figures=False, progress=False)
+    >>> rows = pd.read_parquet(root / "out" / "curves.parquet")
+    >>> len(rows), int(rows["error"].notna().sum())
+    (5, 1)
+    >>> truth = [0.025, 0.03, 0.035, 0.042]  # within the error of this coarse 5 x 5 grid:
+    >>> est = rows.dropna(subset=["x1d_mpa"])["x1d_mpa"].to_numpy()
+    >>> bool(abs(est / truth - 1).max() < 0.03)
+    True
     """
     from skinsuction import __version__
-    from skinsuction.identify.measured_fit import load_space
     from skinsuction._files import atomic_output
+    from skinsuction.space import load_space
 
     t0 = time.perf_counter()
     if not Path(path).exists():
