@@ -288,7 +288,8 @@ def _line_range(point, direction, lower, upper):
 
 
 class _Profile2D:
-    """min over w of chi2(u c + w c_perp): the profile of the coordinate u = c . theta."""
+    """min over w of chi2(u c + w c_perp): the profile of the coordinate u = c . theta
+    (evaluated, with other profiles, by :func:`_profiles`)."""
 
     def __init__(self, residuals, n, c, lower, upper):
         self.residuals, self.n = residuals, n
@@ -299,10 +300,6 @@ class _Profile2D:
                             [upper[0], lower[1]], [upper[0], upper[1]]])
         self.u_range = (float((corners @ self.c).min()), float((corners @ self.c).max()))
         self.evaluations = 0
-
-    def __call__(self, us):
-        """(profile chi2, argmin theta) at each u of ``us``."""
-        return _profiles([(self, us)])[0]
 
 
 def _profiles(items):
@@ -340,12 +337,13 @@ def _profiles(items):
     w = lo[:, None] + (hi - lo)[:, None] * frac[None, :]
     cell = (hi - lo) / (PROFILE_W - 1)
     rows = np.arange(u.size)
+    per_item = np.bincount([k for k, _ in owner], minlength=len(items))
     for rnd in range(ZOOM_ROUNDS + 1):
         theta = u[:, None, None] * c[:, None, :] + w[:, :, None] * wd[:, None, :]
         theta = np.clip(theta, lower[:, None, :], upper[:, None, :])
         chi2 = _chi2(prof0.residuals, theta.reshape(-1, 2), prof0.n).reshape(w.shape)
-        for k, (prof, _) in enumerate(items):
-            prof.evaluations += int(sum(1 for kk, _ in owner if kk == k)) * w.shape[1]
+        for prof, rows_of in zip((p for p, _ in items), per_item):
+            prof.evaluations += int(rows_of) * w.shape[1]
         j = np.argmin(chi2, axis=1)
         w_best, c_best = w[rows, j], chi2[rows, j]
         if rnd == ZOOM_ROUNDS:
