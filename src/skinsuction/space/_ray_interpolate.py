@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ._interpolate import GriddedSpace, LagrangeAxis, SpaceInterpolant, _numerators
+from ._interpolate import GriddedSpace, LagrangeAxis, SpaceInterpolant, _cubic_weights, _numerators
 from ._rays import RaySpace
 
 __all__ = ["RayInterpolant", "NeoHookeanSlice", "TabulatedInterpolant"]
@@ -24,6 +24,8 @@ def _weights_at(axis: LagrangeAxis, x, start) -> np.ndarray:
     """Lagrange weights of the stencils starting at ``start`` (not necessarily centred)."""
 
     m = axis.m
+    if m == 4:
+        return _cubic_weights(np.asarray(x, dtype=float), start, axis._columns)
     table = axis._table[start]
     w = _numerators(np.asarray(x, dtype=float)[:, None] - table[:, :m])
     w /= table[:, m:]
@@ -86,6 +88,7 @@ class RayInterpolant:
             g = np.log(rays[..., 1:])  # log M at p > 0; M(0) = 0
         g[~np.isfinite(g)] = np.nan  # a zero or negative deflection is unusable
         self._g = g
+        self._flat_g = g.reshape(-1, g.shape[-1])  # rows (r, c)
         self._axis_r = LagrangeAxis(np.log10(spec.ratio_nodes))
         self._axis_c = (LagrangeAxis(space.cause.axis_nodes) if space.cause is not None
                         else None)
@@ -112,19 +115,25 @@ class RayInterpolant:
     def _combine(self, theta, start_r, start_c=None):
         """log M of the candidates' rays with the given stencil starts, (N, n_p - 1)."""
         wr = _weights_at(self._axis_r, theta[:, 1], start_r)
-        ir = start_r[:, None] + np.arange(self._axis_r.m)
+        rows = start_r[:, None] + np.arange(self._axis_r.m)  # rows of the (r, c) table
+        w = wr
+        if self.d == 3:
+            wc = _weights_at(self._axis_c, theta[:, 2], start_c)
+            n_c = self._g.shape[1]
+            rows = (rows[:, :, None] * n_c + start_c[:, None, None]
+                    + np.arange(self._axis_c.m)).reshape(len(theta), -1)
+            w = (wr[:, :, None] * wc[:, None, :]).reshape(len(theta), -1)
+        else:
+            rows = rows * self._g.shape[1]
+        stencil = np.take(self._flat_g, rows, axis=0)  # (N, stencil, n_p - 1)
+        out = np.einsum("nk,nkp->np", w, stencil)
         # a ray with weight exactly 0 (the candidate sits on a node) is ignored, so a
         # neighbouring ray that stopped early does not spoil a node (NaN * 0 = NaN)
-        if self.d == 2:
-            stencil = self._g[ir, 0]  # (N, mr, n_p - 1)
-            stencil = np.where((wr == 0.0)[:, :, None], 0.0, stencil)
-            return np.einsum("nk,nkp->np", wr, stencil)
-        wc = _weights_at(self._axis_c, theta[:, 2], start_c)
-        ic = start_c[:, None] + np.arange(self._axis_c.m)
-        stencil = self._g[ir[:, :, None], ic[:, None, :]]  # (N, mr, mc, n_p - 1)
-        w = wr[:, :, None] * wc[:, None, :]
-        stencil = np.where((w == 0.0)[..., None], 0.0, stencil)
-        return np.einsum("nkl,nklp->np", w, stencil)
+        redo = np.flatnonzero(np.isnan(out).any(axis=1) & (w == 0.0).any(axis=1))
+        if redo.size:
+            zeroed = np.where((w[redo] == 0.0)[:, :, None], 0.0, stencil[redo])
+            out[redo] = np.einsum("nk,nkp->np", w[redo], zeroed)
+        return out
 
     def combined_rays(self, theta) -> np.ndarray:
         """The rays at (r, c) of the candidates on the ray pressures, (N, n_p), mm.
@@ -178,10 +187,22 @@ class RayInterpolant:
         # pressure p X1d_ref / X1d of the FE run; beyond the ray's reach: NaN
         q = self.pressure_mbar[None, :] * (self.x1d_ref / x1d)[:, None]  # (N, u)
         start, w = self._axis_p.weights(q.reshape(-1))
-        idx = start[:, None] + np.arange(self._axis_p.m)  # (N u, m)
-        rows = np.repeat(np.arange(n), u)[:, None]
-        nodes = rays[rows, idx]
-        vals = np.where(w == 0.0, 0.0, w * nodes).sum(axis=1)
+        m = self._axis_p.m
+        # the stencil of (candidate, pressure) in the flat rays, gathered one node
+        # at a time: four 1-D gathers are faster than one (N u, m) gather
+        flat = rays.reshape(-1)
+        row0 = np.repeat(np.arange(n) * rays.shape[1], u)
+        first = row0 + start
+        w_by_node = w.T
+        vals = w_by_node[0] * flat.take(first)
+        for k in range(1, m):
+            vals += w_by_node[k] * flat.take(first + k)
+        # a node with weight exactly 0 is ignored (NaN * 0 = NaN), as across rays
+        redo = np.flatnonzero(np.isnan(vals))
+        redo = redo[(w[redo] == 0.0).any(axis=1)]
+        if redo.size:
+            nodes = flat.take(first[redo, None] + np.arange(m))
+            vals[redo] = np.where(w[redo] == 0.0, 0.0, w[redo] * nodes).sum(axis=1)
         # next to where a ray stopped, the centred stencil reaches past its last load:
         # shift it back while it still holds the candidate's cell
         hole = np.flatnonzero(np.isnan(vals) & ~np.isnan(w[:, 0]))
@@ -190,12 +211,12 @@ class RayInterpolant:
             cell = np.searchsorted(self._axis_p.nodes, qh, side="right") - 1
             for shift in (1, 2):
                 s = start[hole] - shift
-                ok = (s >= 0) & (s + self._axis_p.m - 2 >= cell)
+                ok = (s >= 0) & (s + m - 2 >= cell)
                 if not ok.any():
                     break
                 ws = _weights_at(self._axis_p, qh[ok], s[ok])
-                ids = s[ok, None] + np.arange(self._axis_p.m)
-                alt = np.where(ws == 0.0, 0.0, ws * rays[rows[hole[ok]], ids]).sum(axis=1)
+                ids = s[ok, None] + np.arange(m)
+                alt = np.where(ws == 0.0, 0.0, ws * flat.take(row0[hole[ok], None] + ids)).sum(axis=1)
                 fill = hole[ok]
                 vals[fill] = np.where(np.isnan(vals[fill]), alt, vals[fill])
         vals = vals.reshape(n, u)
