@@ -467,10 +467,11 @@ class SpaceInterpolant:
         ad, ah = self.axis_d, self.axis_h
         if self._cell_starts is not None:
             return self._basis_from_starts(x)
-        if ad.m != ah.m:
+        if ad.m != ah.m or ad.m == 4:
             sd, wd = ad.weights(x[:, 0])
             sh, wh = ah.weights(x[:, 1])
-            return sd, sh, wd[:, self._outer_d] * wh[:, self._outer_h]
+            # the tensor product, rows in the order of the stencil (d outer, h inner)
+            return sd, sh, (wd[:, :, None] * wh[:, None, :]).reshape(x.shape[0], -1)
         # both axes at once: one gather, one numerator evaluation for 2N points
         n, m = x.shape[0], ad.m
         xd, xh = x[:, 0], x[:, 1]
@@ -496,11 +497,15 @@ class SpaceInterpolant:
         sd, sh = starts[:, 0], starts[:, 1]
         basis = []
         for axis, xi, si in ((ad, xd, sd), (ah, xh, sh)):
+            if axis.m == 4:
+                basis.append(_cubic_weights(xi, si, axis._columns))
+                continue
             table = axis._table[si]
             w = _numerators(xi[:, None] - table[:, : axis.m])
             w /= table[:, axis.m:]
             basis.append(w)
-        basis = basis[0][:, self._outer_d] * basis[1][:, self._outer_h]
+        # the tensor product, rows in the order of the stencil (d outer, h inner)
+        basis = (basis[0][:, :, None] * basis[1][:, None, :]).reshape(x.shape[0], -1)
         outside = (rd == 0) | ~(xd <= ad.nodes[-1]) | (rh == 0) | ~(xh <= ah.nodes[-1])
         if outside.any():
             basis[outside] = np.nan

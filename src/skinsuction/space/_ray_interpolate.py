@@ -112,13 +112,17 @@ class RayInterpolant:
             hi.append(float(self.space.cause.axis_nodes[-1]))
         return np.array(hi)
 
-    def _combine(self, theta, start_r, start_c=None):
-        """log M of the candidates' rays with the given stencil starts, (N, n_p - 1)."""
-        wr = _weights_at(self._axis_r, theta[:, 1], start_r)
+    def _combine(self, theta, start_r, start_c=None, wr=None, wc=None):
+        """log M of the candidates' rays with the given stencil starts, (N, n_p - 1).
+
+        ``wr``, ``wc``: the weights of these starts, if already known."""
+        if wr is None:
+            wr = _weights_at(self._axis_r, theta[:, 1], start_r)
         rows = start_r[:, None] + np.arange(self._axis_r.m)  # rows of the (r, c) table
         w = wr
         if self.d == 3:
-            wc = _weights_at(self._axis_c, theta[:, 2], start_c)
+            if wc is None:
+                wc = _weights_at(self._axis_c, theta[:, 2], start_c)
             n_c = self._g.shape[1]
             rows = (rows[:, :, None] * n_c + start_c[:, None, None]
                     + np.arange(self._axis_c.m)).reshape(len(theta), -1)
@@ -146,11 +150,11 @@ class RayInterpolant:
         n = theta.shape[0]
         sr, wr = self._axis_r.weights(theta[:, 1])
         outside = np.isnan(wr[:, 0])
-        sc = None
+        sc = wc = None
         if self.d == 3:
             sc, wc = self._axis_c.weights(theta[:, 2])
             outside |= np.isnan(wc[:, 0])
-        g = self._combine(theta, sr, sc)
+        g = self._combine(theta, sr, sc, wr, wc)
         g[outside] = np.nan  # no extrapolation
         bad = np.flatnonzero(np.isnan(g).any(axis=1) & ~outside)
         if bad.size:
@@ -331,11 +335,23 @@ class TabulatedInterpolant:
         table = GriddedSpace(lx, lr, self.pressure_mbar[self._pos],
                              g.reshape(n, lr.size, -1), probe_mm)
         self._log_m = SpaceInterpolant(table, "shift")
+        # the usual protocol has p = 0 first (or not at all): a slice, not a mask
+        first = int(np.argmax(self._pos)) if self._pos.any() else self._pos.size
+        self._positive = (slice(first, None) if self._pos[first:].all() and not self._pos[:first].any()
+                          else self._pos)
+        self._buffer = np.empty((0, int(self._pos.sum())))
 
     def __call__(self, candidates, out=None) -> np.ndarray:
         cand = np.atleast_2d(np.asarray(candidates, dtype=float))
+        n = cand.shape[0]
         if out is None:
-            out = np.empty((cand.shape[0], self.pressure_mbar.size))
+            out = np.empty((n, self.pressure_mbar.size))
         out[:, ~self._pos] = 0.0
-        out[:, self._pos] = np.exp(self._log_m(cand))
+        if self._buffer.shape[0] < n:
+            self._buffer = np.empty((n, self._buffer.shape[1]))
+        log_m = self._log_m(cand, out=self._buffer[:n])
+        if isinstance(self._positive, slice):
+            np.exp(log_m, out=out[:, self._positive])
+        else:
+            out[:, self._positive] = np.exp(log_m)
         return out
