@@ -49,8 +49,8 @@ def one_draw(job):
     from skinsuction.diagnose import Settings
     from skinsuction.diagnose._confusion import run_draw
 
-    truth, seed, space_dir, settings = job
-    return run_draw(truth, seed, _spaces(space_dir), Settings(**settings))
+    truth, seed, space_dir, settings, cache = job
+    return run_draw(truth, seed, _spaces(space_dir), Settings(**settings), cache_dir=cache)
 
 
 def main(argv=None):
@@ -62,6 +62,11 @@ def main(argv=None):
     ap.add_argument("--out", default="benchmarks/out/diagnose_confusion.csv")
     ap.add_argument("--repeats", type=int, default=None,
                     help="window focusing runs per fit (default: the package default)")
+    ap.add_argument("--truths", nargs="+", default=None,
+                    help="true causes to draw (default: none and every cause of the space)")
+    ap.add_argument("--cache", default="benchmarks/out/diagnose_confusion_fe",
+                    help="folder of the draws' noise-free FE curves, reused when the "
+                         "diagnosis changes ('' to solve every draw again)")
     args = ap.parse_args(argv)
 
     from skinsuction.diagnose._confusion import summarise
@@ -70,8 +75,10 @@ def main(argv=None):
     spaces = _spaces(args.space_dir)
     causes = [n for n in spaces if n != "neo_hookean"]
     settings = {} if args.repeats is None else {"repeats": args.repeats}
-    jobs = [(truth, args.seed + 100000 * k + i, args.space_dir, settings)
-            for k, truth in enumerate(["none", *causes]) for i in range(args.per_cause)]
+    cache = args.cache or None
+    jobs = [(truth, args.seed + 100000 * k + i, args.space_dir, settings, cache)
+            for k, truth in enumerate(["none", *causes]) for i in range(args.per_cause)
+            if args.truths is None or truth in args.truths]
     print(f"{len(jobs)} virtual experiments ({args.per_cause} per true cause), space "
           f"{args.space_dir}, {args.workers} worker(s)", flush=True)
     t0 = time.perf_counter()

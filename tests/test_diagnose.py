@@ -274,6 +274,57 @@ def test_fit_recovers_three_parameters_of_the_toy_family():
     assert f.rms_um < 0.05
 
 
+def test_the_space_error_term_is_the_chi2_of_its_covariance_in_every_fit_path():
+    # with_space_error must give the chi^2 r^T (s^2 I + v v^T)^-1 r of the measured
+    # profile (computed here by a dense solve) in the window focusing's objective, the
+    # least-squares residuals and the reported fit alike
+    from skinsuction.diagnose._fit import ModelCurves, _Objective, evaluate_fit, with_space_error
+    from skinsuction.identify.measured_fit import SPACE_ERROR_LOADS, SPACE_ERROR_RMS
+
+    spaces = toy_spaces()
+    data = _toy_data(0.02, 0.02, None, "none", 1.0, 4, probes=(6.0,))
+    c = data.curves[0]
+    fd = {6.0: FitData(6.0, c.pressure_mbar[1:], c.deflection_mm[1:], 1.0)}
+    weighted = with_space_error(fd, 0.02)
+    theta = np.array([math.log10(0.021), math.log10(0.02)])  # off the truth: a bias
+    model = ModelCurves(spaces[BASELINE], weighted)
+    fit = evaluate_fit(model, theta, BASELINE)
+    r = 1e3 * (fd[6.0].deflection_mm - fit.fitted_mm[6.0])  # µm
+    v = 1e3 * np.interp(fd[6.0].pressure_mbar / 0.02, SPACE_ERROR_LOADS,
+                        SPACE_ERROR_RMS[6.0]) * np.abs(fd[6.0].deflection_mm)
+    dense = float(r @ np.linalg.solve(np.eye(r.size) + np.outer(v, v), r))
+    assert fit.chi2 == pytest.approx(dense, rel=1e-10)
+    obj = _Objective(model)
+    assert 2 * obj(theta[None, :])[0] == pytest.approx(dense, rel=1e-10)
+    assert (obj.residuals(theta) ** 2).sum() == pytest.approx(dense, rel=1e-10)
+    plain = evaluate_fit(ModelCurves(spaces[BASELINE], fd), theta, BASELINE)
+    assert plain.chi2 == pytest.approx((r ** 2).sum(), rel=1e-10) and plain.chi2 > fit.chi2
+
+
+def test_a_smooth_error_of_the_space_is_not_read_as_a_misfit():
+    # soft skin under the 6 mm probe: the space's own error (smooth, growing with the
+    # load) added to a neo-Hookean curve is a "pattern" to the plain test, not with the term
+    from skinsuction.identify.measured_fit import SPACE_ERROR_LOADS, SPACE_ERROR_RMS
+    from skinsuction.measured import MeasuredCurve, MeasuredData
+
+    spaces = toy_spaces()
+    p = np.arange(0.0, 101.0, 2.0)
+    x1d = 0.02
+    m = toy_curve(x1d, 0.02, None, p, 6.0, "none")
+    # 2.5 times the measured rms, along its profile (well within what FE runs show)
+    bias = 2.5 * np.interp(p / x1d, SPACE_ERROR_LOADS, SPACE_ERROR_RMS[6.0]) * m
+    noisy = m + bias + np.random.default_rng(5).normal(0, 0.1e-3, p.size)
+    noisy[0] = 0.0
+    data = MeasuredData("soft.csv", (MeasuredCurve(6.0, p, noisy, "", 1),), {}, ())
+    fast = dict(repeats=1, noise_um=0.1, window_focusing={"n_samples": 400, "n_best": 10,
+                                                         "tolerance": 1e-6, "max_iter": 100})
+    plain = diagnose(data, spaces, Settings(space_error=False, **fast))
+    weighed = diagnose(data, spaces, Settings(**fast))
+    assert plain["baseline"]["systematic_misfit"], plain["summary"]
+    assert not weighed["baseline"]["systematic_misfit"], weighed["summary"]
+    assert weighed["cause"] == "none"
+
+
 @pytest.mark.parametrize("kind,coord", [("none", None), ("strain_stiffening", 16.0),
                                         ("pre_tension", 1.09)])
 def test_toy_diagnosis_names_the_hidden_cause(kind, coord, tmp_path):

@@ -131,19 +131,19 @@ def test_a_systematic_misfit_widens_the_intervals_by_the_birge_ratio():
 def test_correlated_space_error_whitening_is_the_chi2_of_its_covariance():
     # the rank-one space error: |z - gamma (z . a) a|^2 must equal r^T (D + v v^T)^-1 r,
     # computed here independently with a dense solve
-    from skinsuction.identify.measured_fit import _decorrelate, _space_error_direction
+    from skinsuction.identify.measured_fit import decorrelate, space_error_direction
 
     rng = np.random.default_rng(3)
     p = np.arange(2.0, 101.0, 2.0)
     m = 0.01 * p ** 0.8
     sd = np.full(p.size, 2e-3)
-    a, gamma = _space_error_direction(6.0, p, m, 0.006, sd)
+    a, gamma = space_error_direction(6.0, p, m, 0.006, sd)
     r = rng.normal(0, 2e-3, (5, p.size)) + 0.003 * m  # noise plus a proportional bias
-    chi2 = (_decorrelate(r / sd, a, gamma) ** 2).sum(axis=1)
+    chi2 = (decorrelate(r / sd, a, gamma) ** 2).sum(axis=1)
     v = a * np.sqrt((1.0 / (1.0 - gamma)) ** 2 - 1.0) * sd  # back from (a, gamma) to v
     cov = np.diag(sd ** 2) + np.outer(v, v)
     direct = np.einsum("nt,nt->n", r, np.linalg.solve(cov, r.T).T)
     assert np.allclose(chi2, direct, rtol=1e-10)
     # the correlated term forgives a bias along v far more than one across it
-    along = (_decorrelate((v / sd)[None, :], a, gamma) ** 2).sum()
+    along = (decorrelate((v / sd)[None, :], a, gamma) ** 2).sum()
     assert along < 0.5 * ((v / sd) ** 2).sum()

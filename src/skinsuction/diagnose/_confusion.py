@@ -102,8 +102,42 @@ def _detectability(ve, spaces, settings, n_points):
             "detectable": bool(f.chi2 >= threshold and t.significant)}
 
 
-def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None) -> dict:
-    """Draw, simulate, diagnose and judge one virtual experiment: one row."""
+def _cached_clean(cache_dir, truth, seed, d, mesh):
+    """The noise-free curves of a draw from ``cache_dir``, if there for these parameters."""
+    import json
+
+    if cache_dir is None:
+        return None, None
+    path = Path(cache_dir) / f"{truth}_{seed}.json"
+    key = {k: d[k] for k in ("x1d", "ratio", "p_max", "p_step", "value")} | {"mesh": mesh}
+    if path.exists():
+        saved = json.loads(path.read_text())
+        if saved.get("key") == json.loads(json.dumps(key)):
+            return path, {float(p): np.array(c, dtype=float) for p, c in saved["clean"].items()}
+    return path, None
+
+
+def _save_clean(path, d, mesh, clean):
+    import json
+
+    from skinsuction._files import atomic_output
+
+    key = {k: d[k] for k in ("x1d", "ratio", "p_max", "p_step", "value")} | {"mesh": mesh}
+    body = {"key": key, "clean": {f"{p:g}": [None if not np.isfinite(v) else float(v)
+                                              for v in c] for p, c in clean.items()}}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_output(path) as tmp:
+        tmp.write_text(json.dumps(body))
+
+
+def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
+             cache_dir=None) -> dict:
+    """Draw, simulate, diagnose and judge one virtual experiment: one row.
+
+    ``cache_dir``: where the noise-free FE curves of each draw are kept (one JSON
+    per draw, keyed by its parameters and mesh), so that a change of the
+    diagnosis is re-measured on the same curves without the FE runs.
+    """
     from ._diagnose import BeyondSpaceError, Settings, diagnose_file
     from ._virtual import virtual_experiment, write_csv
 
@@ -113,10 +147,13 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None) ->
     d = draw_wide(seed, cause, domain, base.spec.load_max)
     p = np.arange(0.0, d["p_max"] + 1e-9, d["p_step"])
     t0 = time.perf_counter()
+    cache_path, clean = _cached_clean(cache_dir, truth, seed, d, base.spec.mesh)
     ve = virtual_experiment(d["x1d"], d["ratio"] * d["x1d"], cause, d["value"],
                             noise_um=d["noise_um"], seed=seed, pressures_mbar=p,
                             mesh=base.spec.mesh, bottom=base.spec.bottom,
-                            fallback=list(base.spec.fallback))
+                            fallback=list(base.spec.fallback), clean=clean)
+    if cache_path is not None and clean is None:
+        _save_clean(cache_path, d, base.spec.mesh, ve.clean)
     row = {"truth": truth, "seed": seed, **d, "x1h": ve.x1h, "fe_converged": ve.converged,
            "fe_seconds": time.perf_counter() - t0}
     if truth == "pre_tension":

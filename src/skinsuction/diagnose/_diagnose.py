@@ -45,7 +45,7 @@ from skinsuction.identify import IdentificationError
 from skinsuction.errors import InputError
 
 from skinsuction.space import BASELINE, NONE
-from ._fit import PAPER_WF, FitData, fit_bounds, fit_intervals, fit_model
+from ._fit import PAPER_WF, FitData, fit_bounds, fit_intervals, fit_model, with_space_error
 from ._stats import (
     NoiseEstimate,
     bic,
@@ -102,6 +102,12 @@ class Settings:
         CPU each on the default space).
     window_focusing : dict
         N, Nb, C, max_iter.
+    space_error : bool
+        Weigh the scale-free space's correlated error along each curve (its rms per
+        load p / X1d, measured against direct FE runs) in every chi^2 and in the
+        misfit test, as the identification's intervals do; without it a smooth
+        error of the space on soft skin (a few µm at the top of a 6 mm curve) reads
+        as a systematic misfit.
     """
 
     alpha: float = 0.01
@@ -116,6 +122,7 @@ class Settings:
     level: float = 0.95
     intervals: str = "chosen"
     window_focusing: dict = field(default_factory=lambda: dict(PAPER_WF))
+    space_error: bool = True
 
     def __post_init__(self):
         if not 0 < self.alpha < 1:
@@ -221,8 +228,11 @@ def _intervals(space, fd, theta, noise, settings):
         return {"error": str(err)}
 
 
-def _residual_dict(fit, data):
-    return {p: (data[p].pressure_mbar, fit.residual_um[p]) for p in data}
+def _residual_dict(fit, data, independent=True):
+    """{probe: (pressure, residual µm)}: by default with the space's correlated error
+    taken out (what the misfit test judges), else as measured minus fitted."""
+    res = fit.independent_um if independent and fit.independent_um else fit.residual_um
+    return {p: (data[p].pressure_mbar, res[p]) for p in data}
 
 
 def _fit_json(fit, test=None):
@@ -308,6 +318,14 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
                          window_focusing_options=settings.window_focusing)
     except IdentificationError:
         raise BeyondSpaceError(_beyond_message(base_space, fd)) from None
+    if settings.space_error:
+        # the space's error grows with the load p / X1d: weigh it at the baseline's X1d,
+        # then polish the baseline under that likelihood, as every cause is fitted
+        fd = with_space_error(fd, base.parameters["X1d"])
+        searched = base.wf
+        base = fit_model(base_space, fd, seed=0, repeats=0, starts=[base.theta],
+                         window_focusing_options=settings.window_focusing)
+        base.wf = {**searched, "space_error_polished": base.wf["polished"]}
     base_test = misfit_test(_residual_dict(base, fd), sigma, noise.dof, settings.degree,
                             settings.alpha)
     base_bic = bic(base.chi2, base.n_params, n_points)
@@ -399,7 +417,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     ranked = sorted(candidates, key=lambda c: c["bic"])
     runner_up = next((c for c in ranked if best is not None and c is not best), None)
 
-    description = describe_residuals(base_test, _residual_dict(base, fd), sigma)
+    description = describe_residuals(base_test, _residual_dict(base, fd, False), sigma)
     report = {
         "input": {**(source or {}), "probes_mm": [float(p) for p in probes],
                   "probes_skipped_mm": [float(p) for p in skipped],

@@ -14,7 +14,7 @@ minimum and not the stochastic stop of the window focusing.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.optimize import least_squares
@@ -25,11 +25,12 @@ from skinsuction.identify import (
     profile_intervals,
     window_focusing,
 )
+from skinsuction.identify.measured_fit import decorrelate, space_error_direction
 
 from skinsuction.space import RayInterpolant, RaySpace
 
 __all__ = ["FitData", "Fit", "ModelCurves", "fit_model", "fit_bounds", "fit_intervals",
-           "PAPER_WF"]
+           "with_space_error", "PAPER_WF"]
 
 #: Window focusing settings of the paper (section 2.4); C in units of sqrt(chi^2/n).
 PAPER_WF = {"n_samples": 1000, "n_best": 20, "tolerance": 1e-6, "max_iter": 200}
@@ -44,10 +45,38 @@ class FitData:
     deflection_mm: np.ndarray
     sigma_um: float
     curve_ids: tuple = ()
+    #: (unit direction, gamma) of the space's correlated error along the curve
+    #: (:func:`with_space_error`), or None: independent points
+    space_error: tuple | None = None
 
     @property
     def n(self) -> int:
         return int(self.pressure_mbar.size)
+
+    def whiten(self, z: np.ndarray) -> np.ndarray:
+        """Residuals in units of sigma (N, n) -> independent unit-variance ones."""
+        if self.space_error is None:
+            return z
+        return decorrelate(z, *self.space_error)
+
+
+def with_space_error(data: dict, x1d_mpa: float) -> dict:
+    """``data`` ({probe: FitData}) with the space's correlated error of each probe.
+
+    The error of the scale-free space against direct FE runs is smooth along a
+    curve and grows with the load p / X1d (soft skin under the 6 mm probe); it
+    enters each probe's likelihood as one rank-one covariance term, as in the
+    identification's intervals (:func:`skinsuction.identify.measured_fit.space_error_direction`,
+    measured by ``benchmarks/space_error_profile.py``).  The load of a point is taken
+    at ``x1d_mpa`` (the baseline's X1d): every model of the diagnosis then weighs
+    the points alike.
+    """
+    out = {}
+    for p, d in data.items():
+        a, gamma = space_error_direction(p, d.pressure_mbar, d.deflection_mm, x1d_mpa,
+                                         np.full(d.n, 1e-3 * d.sigma_um))
+        out[p] = replace(d, space_error=None if a is None else (a, gamma))
+    return out
 
 
 class ModelCurves:
@@ -87,7 +116,7 @@ class _Objective:
         chi2 = 0.0
         for p, m in self.model(theta).items():
             d = self.model.data[p]
-            r = (d.deflection_mm[None, :] - m) * (1e3 / d.sigma_um)
+            r = d.whiten((d.deflection_mm[None, :] - m) * (1e3 / d.sigma_um))
             chi2 = chi2 + np.einsum("nt,nt->n", r, r)
         cost = 0.5 * np.asarray(chi2, dtype=float)
         cost[~np.isfinite(cost)] = np.inf
@@ -100,7 +129,7 @@ class _Objective:
         out = []
         for p, m in self.model(np.asarray(theta, dtype=float)[None, :]).items():
             d = self.model.data[p]
-            out.append((d.deflection_mm - m[0]) * (1e3 / d.sigma_um))
+            out.append(d.whiten((d.deflection_mm - m[None, 0]) * (1e3 / d.sigma_um))[0])
         r = np.concatenate(out)
         return np.where(np.isfinite(r), r, 1e6)
 
@@ -120,6 +149,9 @@ class Fit:
     fitted_mm: dict  # probe -> (u,)
     residual_um: dict  # probe -> (u,)
     wf: dict = field(default_factory=dict)
+    #: probe -> residuals (µm) with the space's correlated error taken out (independent
+    #: points of sd sigma, what the misfit test judges); the residuals if it is not used
+    independent_um: dict = field(default_factory=dict)
 
     @property
     def finite(self) -> bool:
@@ -134,18 +166,21 @@ def evaluate_fit(model: ModelCurves, theta, name: str, wf=None) -> Fit:
     """A :class:`Fit` at a given theta (chi^2, E, residuals)."""
     curves = _curves_at(model, theta)
     chi2, sq, n = 0.0, 0.0, 0
-    res = {}
+    res, independent = {}, {}
     for p, c in curves.items():
         d = model.data[p]
         e = 1e3 * (d.deflection_mm - c)
         res[p] = e
-        chi2 += float(((e / d.sigma_um) ** 2).sum())
+        z = d.whiten((e / d.sigma_um)[None, :])[0]
+        independent[p] = z * d.sigma_um
+        chi2 += float((z ** 2).sum())
         sq += float((e ** 2).sum())
         n += d.n
     if not math.isfinite(chi2):
         chi2 = sq = math.inf
     return Fit(name, np.asarray(theta, dtype=float), model.parameters(theta), chi2, n,
-               model.d, math.sqrt(sq) / n, math.sqrt(sq / n), curves, res, dict(wf or {}))
+               model.d, math.sqrt(sq) / n, math.sqrt(sq / n), curves, res, dict(wf or {}),
+               independent)
 
 
 def fit_model(space: RaySpace, data: dict, *, seed=0, repeats: int = 2,
@@ -251,9 +286,9 @@ def fit_intervals(space: RaySpace, data: dict, theta, *, noise_dof: float = math
 
     def residuals(t):
         curves = model(t)
-        return np.concatenate([(model.data[p].deflection_mm[None, :] - c)
-                               * (1e3 / model.data[p].sigma_um) for p, c in curves.items()],
-                              axis=1)
+        return np.concatenate([model.data[p].whiten((model.data[p].deflection_mm[None, :] - c)
+                                                    * (1e3 / model.data[p].sigma_um))
+                               for p, c in curves.items()], axis=1)
 
     params = {"X1d": lambda t: 10.0 ** t[:, 0], "X1h": lambda t: 10.0 ** (t[:, 0] + t[:, 1])}
     if cause is not None:

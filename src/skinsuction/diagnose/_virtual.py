@@ -75,13 +75,16 @@ class VirtualExperiment:
 
 def virtual_experiment(x1d, x1h, cause: Cause | None = None, value=None, *, noise_um=2.0,
                        seed=0, probes_mm=(2.0, 6.0), pressures_mbar=None, mesh=None,
-                       replicates: int = 1, bottom="fixed", fallback=None) -> VirtualExperiment:
+                       replicates: int = 1, bottom="fixed", fallback=None,
+                       clean: dict | None = None) -> VirtualExperiment:
     """FE curves at (X1d, X1h) with the hidden effect ``cause = value``, plus noise.
 
     ``value`` is in the unit of the cause's parameter (X2d in MPa, t_d in mm,
     lambda0); ``cause=None`` is the neo-Hookean model.  ``fallback``: fallback
     meshes where the first solve stops (:func:`skinsuction.space.solve_with_fallbacks`),
-    as for the rays of the space.
+    as for the rays of the space.  ``clean``: ``{probe: noise-free curve}`` of
+    these parameters from an earlier run (e.g. a benchmark's cache), used instead
+    of solving again; the noise is drawn from ``seed`` all the same.
     """
     from skinsuction.space import solve_with_fallbacks
 
@@ -95,13 +98,19 @@ def virtual_experiment(x1d, x1h, cause: Cause | None = None, value=None, *, nois
                            tuple(float(q) for q in probes_mm), dict(mesh or {}),
                            replicates=int(replicates), unit=None if cause is None else cause.unit)
     for probe in ve.probes_mm:
-        c, _, _ = solve_with_fallbacks(dict(x1d=x1d, x1h=x1h, probe_mm=probe, bottom=bottom,
-                                            **kw), p, dict(mesh or {}), fallback,
-                                       label=f"virtual experiment {seed}", splice=True)
-        ve.converged &= bool(c.converged)
-        ve.clean[probe] = c.deflection_mm
+        if clean is not None:
+            curve = np.asarray(clean[probe], dtype=float)
+            ve.converged &= bool(np.all(np.isfinite(curve)))
+        else:
+            c, _, _ = solve_with_fallbacks(dict(x1d=x1d, x1h=x1h, probe_mm=probe,
+                                                bottom=bottom, **kw), p, dict(mesh or {}),
+                                           fallback, label=f"virtual experiment {seed}",
+                                           splice=True)
+            ve.converged &= bool(c.converged)
+            curve = c.deflection_mm
+        ve.clean[probe] = curve
         for r in range(ve.replicates):
-            m = c.deflection_mm + rng.normal(0.0, 1e-3 * noise_um, p.size)
+            m = curve + rng.normal(0.0, 1e-3 * noise_um, p.size)
             m[p == 0] = 0.0
             ve.curves[(probe, r)] = m
     return ve

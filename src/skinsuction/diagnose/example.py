@@ -13,7 +13,6 @@ about 1-10 µm), NumPy seed 2024.
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 import numpy as np
 

@@ -47,7 +47,8 @@ from ._objectives import ratio_objective, single_objective, weighted_objective
 from ._window_focusing import IdentificationError, identify_repeated
 
 __all__ = ["InputError", "OBJECTIVE_KINDS", "identify_measured", "identify_data",
-           "write_identification", "file_sha256", "load_space", "LoadedSpace"]
+           "write_identification", "file_sha256", "load_space", "LoadedSpace",
+           "space_error_direction", "decorrelate"]
 
 #: Objectives of ``skinsuction identify --objective``.
 OBJECTIVE_KINDS = ("single", "weighted", "ratio")
@@ -392,7 +393,7 @@ def _point_sd(sigma_mm, measured_mm, model_error):
     return np.sqrt(sigma_mm ** 2 + (model_error * np.abs(measured_mm)) ** 2 + floor ** 2)
 
 
-def _space_error_direction(probe_mm, pressure_mbar, measured_mm, x1d_mpa, sd):
+def space_error_direction(probe_mm, pressure_mbar, measured_mm, x1d_mpa, sd):
     """(unit direction, gamma) of the correlated space error of one probe's points.
 
     The covariance of the points is ``diag(sd^2) + v v^T`` with ``v`` the rms
@@ -412,7 +413,9 @@ def _space_error_direction(probe_mm, pressure_mbar, measured_mm, x1d_mpa, sd):
     return v / norm, 1.0 - 1.0 / math.sqrt(1.0 + norm ** 2)
 
 
-def _decorrelate(z, direction, gamma):
+def decorrelate(z, direction, gamma):
+    """Whitened residuals ``z`` (N, n) under the correlated space error of
+    :func:`space_error_direction`: ``z - gamma (z . a) a``, row by row."""
     if direction is None:
         return z
     # einsum, not @: a matrix-vector product of many rows would start BLAS threads
@@ -434,17 +437,17 @@ def _likelihood_residuals(obj, objective, curves, sigma_mm, model_error=MODEL_ER
     def block(o, p):
         sd = _point_sd(sigma_mm, o.measured_mm, model_error)
         a, g = ((None, 0.0) if x1d_mpa is None else
-                _space_error_direction(p, o.pressure_mbar, o.measured_mm, x1d_mpa, sd))
+                space_error_direction(p, o.pressure_mbar, o.measured_mm, x1d_mpa, sd))
         return sd, a, g
 
     if objective == "single":
         sd, a, g = block(obj, obj.space.probe_mm)
-        return lambda t: _decorrelate(obj.residuals(t) / sd, a, g)
+        return lambda t: decorrelate(obj.residuals(t) / sd, a, g)
     if objective == "weighted":
         b2, b6 = block(obj.objective_2mm, 2.0), block(obj.objective_6mm, 6.0)
         return lambda t: np.concatenate(
-            [_decorrelate(obj.objective_2mm.residuals(t) / b2[0], b2[1], b2[2]),
-             _decorrelate(obj.objective_6mm.residuals(t) / b6[0], b6[1], b6[2])], axis=1)
+            [decorrelate(obj.objective_2mm.residuals(t) / b2[0], b2[1], b2[2]),
+             decorrelate(obj.objective_6mm.residuals(t) / b6[0], b6[1], b6[2])], axis=1)
     m2 = np.abs(obj.objective_2mm.measured_mm)
     m6 = np.abs(obj.objective_6mm.measured_mm)
     s2, s6 = _point_sd(sigma_mm, m2, model_error), _point_sd(sigma_mm, m6, model_error)
