@@ -6,9 +6,6 @@ from skinsuction._threads import limit_threads
 
 limit_threads(snakemake.threads)
 
-from skinsuction._threads import limit_threads  # noqa: E402
-
-limit_threads(1)
 
 from skinsuction.provenance import log_to_file  # noqa: E402
 

@@ -8,10 +8,6 @@ limit_threads(snakemake.threads)
 
 from pathlib import Path  # noqa: E402
 
-from skinsuction._threads import limit_threads  # noqa: E402
-
-limit_threads(1)  # single-thread timings, jobs side by side
-
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
