@@ -6,7 +6,6 @@ from skinsuction._threads import limit_threads
 
 limit_threads(snakemake.threads)
 
-
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
