@@ -62,6 +62,9 @@ def main(argv=None):
     ap.add_argument("--out", default="benchmarks/out/diagnose_confusion.csv")
     ap.add_argument("--repeats", type=int, default=None,
                     help="window focusing runs per fit (default: the package default)")
+    ap.add_argument("--no-space-error", action="store_true",
+                    help="leave the space's correlated error out of the diagnosis "
+                         "(Settings.space_error=False), for comparison")
     ap.add_argument("--truths", nargs="+", default=None,
                     help="true causes to draw (default: none and every cause of the space)")
     ap.add_argument("--cache", default="benchmarks/out/diagnose_confusion_fe",
@@ -75,6 +78,8 @@ def main(argv=None):
     spaces = _spaces(args.space_dir)
     causes = [n for n in spaces if n != "neo_hookean"]
     settings = {} if args.repeats is None else {"repeats": args.repeats}
+    if args.no_space_error:
+        settings["space_error"] = False
     cache = args.cache or None
     jobs = [(truth, args.seed + 100000 * k + i, args.space_dir, settings, cache)
             for k, truth in enumerate(["none", *causes]) for i in range(args.per_cause)
