@@ -72,7 +72,7 @@ def main(argv=None):
                          "diagnosis changes ('' to solve every draw again)")
     args = ap.parse_args(argv)
 
-    from skinsuction.diagnose._confusion import summarise
+    from skinsuction.diagnose._confusion import UNDIAGNOSED, summarise
     from skinsuction.figures.detectability import plot_detectability
 
     spaces = _spaces(args.space_dir)
@@ -119,16 +119,19 @@ def main(argv=None):
     print("\nPer true cause (fractions; errors are medians of |relative error|, lambda0 as "
           "lambda0 - 1):")
     print(s["rates"].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
-    pt = df[(df["truth"] == "pre_tension") & (df["named"] != "fe_failed")]
+    pt = df[(df["truth"] == "pre_tension") & ~df["named"].isin(UNDIAGNOSED)]
     if len(pt):
         print(f"\nInitial in-plane stress of the pre-tension draws: "
               f"{pt['initial_stress_kpa'].min():.2g}-{pt['initial_stress_kpa'].max():.2g} kPa "
               f"(median {pt['initial_stress_kpa'].median():.2g})")
-    ok = df[df["named"] != "fe_failed"]
+    for _, r in df[df["named"] == "input_rejected"].iterrows():
+        print(f"  input rejected: {r['truth']} seed {r['seed']}: {r['error']}")
+    ok = df[~df["named"].isin(UNDIAGNOSED)]
     print(f"\nOne diagnosis: median {ok['cpu_seconds'].median():.2f} s CPU "
           f"({ok['wall_seconds'].median():.2f} s wall), max {ok['cpu_seconds'].max():.2f} s CPU; "
           f"FE of one virtual experiment: median {df['fe_seconds'].median():.1f} s; "
-          f"FE failures {int((df['named'] == 'fe_failed').sum())}")
+          f"FE failures {int((df['named'] == 'fe_failed').sum())}, inputs rejected "
+          f"{int((df['named'] == 'input_rejected').sum())}")
     print(f"total {time.perf_counter() - t0:.0f} s; rows written to {out}, map to "
           f"{out.with_suffix('.png')}")
     return 0

@@ -323,3 +323,17 @@ def test_a_million_rows_load_in_bounded_memory_or_fail_fast(tmp_path):
     assert "loaded 500" in out["many.csv"]
     rss = float(out["many.csv"].split("maxrss_mb")[1])
     assert rss < 3 * 1024
+
+
+def test_a_rejection_crosses_a_process_pool():
+    # study and benchmark workers send exceptions back by pickle: the error must come
+    # back whole (it once broke the pool: its __init__ needs four arguments)
+    import pickle
+
+    from skinsuction.measured import MeasuredDataError
+
+    err = MeasuredDataError("m.csv", 7, "deflection_mm", "not a number: 'abc'")
+    back = pickle.loads(pickle.dumps(err))
+    assert type(back) is MeasuredDataError and str(back) == str(err)
+    assert (back.path, back.line, back.column, back.reason) == ("m.csv", 7, "deflection_mm",
+                                                                 "not a number: 'abc'")

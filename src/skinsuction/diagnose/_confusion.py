@@ -138,6 +138,8 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     per draw, keyed by its parameters and mesh), so that a change of the
     diagnosis is re-measured on the same curves without the FE runs.
     """
+    from skinsuction.measured import MeasuredDataError
+
     from ._diagnose import BeyondSpaceError, Settings, diagnose_file
     from ._virtual import virtual_experiment, write_csv
 
@@ -169,6 +171,12 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
         except BeyondSpaceError:
             row.update(named="beyond_space", verdict="beyond_space")
             return row
+        except MeasuredDataError as err:
+            # the loader refuses the FE curve as a measurement (a plausibility check):
+            # a row that says so, never a lost draw
+            row.update(named="input_rejected", verdict="input_rejected",
+                       error=" ".join(str(err).split()))
+            return row
     row.update(named=rep["cause"], verdict=rep["verdict"], cpu_seconds=rep["cpu_seconds"],
                wall_seconds=rep["seconds"],
                ambiguous_with=";".join(rep.get("ambiguous_with") or []),
@@ -186,6 +194,10 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     return row
 
 
+#: Draws without a diagnosis: the FE run stopped, or the loader refused its curve.
+UNDIAGNOSED = ("fe_failed", "input_rejected")
+
+
 def summarise(rows: pd.DataFrame, causes) -> dict:
     """Confusion matrices (all and detectable draws), rates and parameter errors."""
     labels = [NONE, *causes]
@@ -193,7 +205,7 @@ def summarise(rows: pd.DataFrame, causes) -> dict:
     for col in ("base_x1d", "ext_x1d", "ext_value", "value", "detectable", "verdict"):
         if col not in rows:
             rows[col] = np.nan
-    ok = rows[rows["named"] != "fe_failed"].copy()
+    ok = rows[~rows["named"].isin(UNDIAGNOSED)].copy()
     ok["detectable"] = ok["detectable"].fillna(True).astype(bool)
     det = ok[(ok["truth"] == NONE) | ok["detectable"]]
     cols = labels + sorted(set(ok["named"]) - set(labels))
@@ -209,6 +221,8 @@ def summarise(rows: pd.DataFrame, causes) -> dict:
         g = det[det["truth"] == truth]
         r = {"truth": truth, "draws": len(g_all), "fe_failed":
              int(((rows["truth"] == truth) & (rows["named"] == "fe_failed")).sum()),
+             "input_rejected":
+             int(((rows["truth"] == truth) & (rows["named"] == "input_rejected")).sum()),
              "detectable": len(g) if truth != NONE else len(g_all),
              "detectable_fraction": (len(g) / len(g_all)) if len(g_all) and truth != NONE
              else math.nan,

@@ -35,7 +35,8 @@ def _kind(row):
 
 def plot_detectability(rows, *paths):
     """Draw the rows of ``benchmarks/diagnose_confusion.py`` (one per draw)."""
-    rows = rows[(rows["named"] != "fe_failed") & (rows["truth"] != "none")].copy()
+    rows = rows[~rows["named"].isin(("fe_failed", "input_rejected"))
+                & (rows["truth"] != "none")].copy()
     causes = list(dict.fromkeys(rows["truth"]))
     with style():
         fig, axes = plt.subplots(1, max(1, len(causes)), squeeze=False,

@@ -44,6 +44,10 @@ class MeasuredDataError(ValueError):
             where += f", column {_show(column)}"
         super().__init__(f"{where}: {self.reason}")
 
+    def __reduce__(self):
+        # rebuilt from its fields, so that it crosses a process pool (study workers)
+        return type(self), (self.path, self.line, self.column, self.reason)
+
 
 @dataclass(frozen=True, eq=False)
 class MeasuredCurve:
