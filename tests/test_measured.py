@@ -337,3 +337,28 @@ def test_a_rejection_crosses_a_process_pool():
     assert type(back) is MeasuredDataError and str(back) == str(err)
     assert (back.path, back.line, back.column, back.reason) == ("m.csv", 7, "deflection_mm",
                                                                  "not a number: 'abc'")
+
+
+def test_a_small_noisy_curve_loads_and_a_falling_one_does_not(tmp_path):
+    # a 2 mm curve of stiff skin rises 19 µm over 100 mbar; with 4.7 µm of noise its
+    # running maximum falls by more than 20 µm somewhere (the old rule's floor), yet it
+    # rises: the curve's own noise (third differences) sets the tolerance
+    p = np.arange(0.0, 101.0, 2.0)
+    clean = 0.196e-3 * p
+    rng = np.random.default_rng(301004)
+    for _ in range(200):  # a draw whose largest fall exceeds 20 µm
+        m = clean + rng.normal(0, 4.7e-3, p.size)
+        m[0] = 0.0
+        if (np.maximum.accumulate(m) - m).max() > 0.020:
+            break
+    else:
+        pytest.fail("no draw with a fall above 20 µm")
+    rows = [HEADER, *(f"2,{a:g},{b:.5f}" for a, b in zip(p, m))]
+    data = load_measured(_write(tmp_path, "\n".join(rows) + "\n"))
+    assert data.curves[0].deflection_mm.size == p.size
+    # the same noise on a curve that falls after 50 mbar (sign flipped there): refused
+    bent = np.where(p <= 50, 2e-3 * p, 2e-3 * (100 - p)) + rng.normal(0, 4.7e-3, p.size)
+    bent[0] = 0.0
+    rows = [HEADER, *(f"2,{a:g},{b:.5f}" for a, b in zip(p, bent))]
+    with pytest.raises(MeasuredDataError, match="falls with the pressure"):
+        load_measured(_write(tmp_path, "\n".join(rows) + "\n", name="bent.csv"))

@@ -29,9 +29,9 @@ def _pressures(report):
 
 
 def _chosen(report):
-    if report["cause"] == "none":
-        return None
-    return next(c for c in report["candidates"] if c["cause"] == report["cause"])
+    """The candidate the verdict names; None for `none`, and for `beyond_space` when the
+    baseline itself sits at an edge (no candidate stands behind the verdict)."""
+    return next((c for c in report["candidates"] if c["cause"] == report["cause"]), None)
 
 
 #: Units of the fitted parameters.

@@ -57,8 +57,10 @@ Unit and plausibility rules, per curve (a Cutometer applies at most about
 * a deflection at 0 mbar above 10 % of the largest and 0.01 mm: the curve must
   be zeroed there (the instrument zeroes at 0 mbar);
 * a fall of the deflection below an earlier one by more than a quarter of the
-  curve's span and 0.02 mm, or a falling trend: it must grow with the pressure
-  (noise makes only small falls).
+  curve's span, 0.02 mm and (on 20 points or more) 8 times the noise sd the curve
+  itself shows in its third differences, or a falling trend: it must grow with the
+  pressure (noise makes only small falls; a small 2 mm curve of stiff skin with 5 µm
+  of noise falls by 20-25 µm, a smooth falling curve has little noise).
 
 Sizes: at most 2 000 points per curve, 2 000 000 lines and 256 MB per file, so
 that a wrong file fails fast instead of filling the memory.

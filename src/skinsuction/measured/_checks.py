@@ -24,6 +24,13 @@ UM_ABOVE_MM = 20.0
 #: Largest |deflection| (mm) below which a curve "looks like metres".
 M_BELOW_MM = 1e-3
 
+#: A fall of the curve below an earlier deflection is an error when it exceeds this
+#: many noise sd of the curve (and a quarter of its span, and 20 µm).
+DROP_NOISE_SD = 8.0
+
+#: Fewest points of a curve for its own noise estimate to count in that rule.
+DROP_NOISE_POINTS = 20
+
 #: A dome cannot rise beyond the aperture: the largest deflection of a curve must
 #: stay below this many aperture diameters ("looks like µm" otherwise).
 APERTURE_LIMIT = 1.0
@@ -120,6 +127,19 @@ def _check_curve(path, rows: _Rows) -> list:
     return warnings
 
 
+def _noise_sd_mm(p, d) -> float:
+    """Noise sd (mm) of one curve from its third differences; 0 below
+    :data:`DROP_NOISE_POINTS` points (too few differences to tell noise from a jump)."""
+    from skinsuction.noise import noise_from_differences
+
+    if len(p) < DROP_NOISE_POINTS:
+        return 0.0
+    try:
+        return 1e-3 * noise_from_differences([(p, d)]).sd_um
+    except ValueError:
+        return 0.0
+
+
 def _check_shape(path, rows: _Rows) -> None:
     """The curve must start at 0 and rise with the pressure (within noise)."""
     p, d, lines = np.asarray(rows.pressure), np.asarray(rows.deflection), rows.lines
@@ -130,11 +150,15 @@ def _check_shape(path, rows: _Rows) -> None:
             f"deflection {d[0]:g} mm at 0 mbar: the curve must be zeroed at 0 mbar (the "
             "instrument zeroes there); subtract it from the curve")
     # the largest fall below an earlier deflection: noise gives small ones, a curve that
-    # falls (wrong sign of the pressure, columns swapped) large ones
+    # falls (wrong sign of the pressure, columns swapped) large ones.  Noise of sd s
+    # about a rising curve falls by up to about 5 s over 50 points (a small 2 mm curve
+    # of stiff skin with 5 µm of noise: 20-25 µm), so the noise the curve itself shows
+    # (third differences, which a smooth curve, falling or not, leaves near 0) counts
     running = np.maximum.accumulate(d)
     drop = running - d
     k = int(np.argmax(drop))
-    if drop[k] > max(0.25 * span, 0.02) or np.polyfit(p, d, 1)[0] <= 0:
+    if drop[k] > max(0.25 * span, 0.02, DROP_NOISE_SD * _noise_sd_mm(p, d)) \
+            or np.polyfit(p, d, 1)[0] <= 0:
         j = int(np.argmax(d[:k + 1])) if drop[k] > 0 else 0
         raise MeasuredDataError(
             path, lines[k], "deflection_mm",
