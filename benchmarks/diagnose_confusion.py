@@ -127,9 +127,11 @@ def main(argv=None):
     for _, r in df[df["named"] == "input_rejected"].iterrows():
         print(f"  input rejected: {r['truth']} seed {r['seed']}: {r['error']}")
     ok = df[~df["named"].isin(UNDIAGNOSED)]
+    solved = df[~df["fe_cached"].astype(bool)]
     print(f"\nOne diagnosis: median {ok['cpu_seconds'].median():.2f} s CPU "
           f"({ok['wall_seconds'].median():.2f} s wall), max {ok['cpu_seconds'].max():.2f} s CPU; "
-          f"FE of one virtual experiment: median {df['fe_seconds'].median():.1f} s; "
+          f"FE of one virtual experiment: median {solved['fe_seconds'].median():.1f} s "
+          f"({len(solved)} solved, {len(df) - len(solved)} from the cache); "
           f"FE failures {int((df['named'] == 'fe_failed').sum())}, inputs rejected "
           f"{int((df['named'] == 'input_rejected').sum())}")
     print(f"total {time.perf_counter() - t0:.0f} s; rows written to {out}, map to "

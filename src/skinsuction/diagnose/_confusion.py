@@ -102,6 +102,14 @@ def _detectability(ve, spaces, settings, n_points):
             "detectable": bool(f.chi2 >= threshold and t.significant)}
 
 
+def _cache_key(d, mesh) -> dict:
+    """What a cached FE curve must match: the draw's parameters and the mesh (as JSON)."""
+    import json
+
+    key = {k: d[k] for k in ("x1d", "ratio", "p_max", "p_step", "value")} | {"mesh": mesh}
+    return json.loads(json.dumps(key))
+
+
 def _cached_clean(cache_dir, truth, seed, d, mesh):
     """The noise-free curves of a draw from ``cache_dir``, if there for these parameters."""
     import json
@@ -109,10 +117,9 @@ def _cached_clean(cache_dir, truth, seed, d, mesh):
     if cache_dir is None:
         return None, None
     path = Path(cache_dir) / f"{truth}_{seed}.json"
-    key = {k: d[k] for k in ("x1d", "ratio", "p_max", "p_step", "value")} | {"mesh": mesh}
     if path.exists():
         saved = json.loads(path.read_text())
-        if saved.get("key") == json.loads(json.dumps(key)):
+        if saved.get("key") == _cache_key(d, mesh):
             return path, {float(p): np.array(c, dtype=float) for p, c in saved["clean"].items()}
     return path, None
 
@@ -122,8 +129,7 @@ def _save_clean(path, d, mesh, clean):
 
     from skinsuction._files import atomic_output
 
-    key = {k: d[k] for k in ("x1d", "ratio", "p_max", "p_step", "value")} | {"mesh": mesh}
-    body = {"key": key, "clean": {f"{p:g}": [None if not np.isfinite(v) else float(v)
+    body = {"key": _cache_key(d, mesh), "clean": {f"{p:g}": [None if not np.isfinite(v) else float(v)
                                               for v in c] for p, c in clean.items()}}
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_output(path) as tmp:
@@ -157,7 +163,7 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     if cache_path is not None and clean is None:
         _save_clean(cache_path, d, base.spec.mesh, ve.clean)
     row = {"truth": truth, "seed": seed, **d, "x1h": ve.x1h, "fe_converged": ve.converged,
-           "fe_seconds": time.perf_counter() - t0}
+           "fe_seconds": time.perf_counter() - t0, "fe_cached": clean is not None}
     if truth == "pre_tension":
         row["initial_stress_kpa"] = initial_stress_kpa(d["value"], d["x1d"])
     if not ve.converged:

@@ -231,7 +231,7 @@ def _intervals(space, fd, theta, noise, settings):
 def _residual_dict(fit, data, independent=True):
     """{probe: (pressure, residual µm)}: by default with the space's correlated error
     taken out (what the misfit test judges), else as measured minus fitted."""
-    res = fit.independent_um if independent and fit.independent_um else fit.residual_um
+    res = fit.independent_um if independent else fit.residual_um
     return {p: (data[p].pressure_mbar, res[p]) for p in data}
 
 

@@ -257,19 +257,24 @@ class LagrangeAxis:
             Weights of the stencil nodes; NaN rows for points outside the nodes.
         """
         x = np.asarray(x, dtype=float).reshape(-1)
-        m = self.m
         r = np.searchsorted(self.nodes, x, side="right")
         start = self._start_of[r]
-        if m == 4:
-            w = _cubic_weights(x, start, self._columns)
-        else:
-            table = self._table[start]  # (N, 2m)
-            w = _numerators(x[:, None] - table[:, :m])
-            w /= table[:, m:]
+        w = self.weights_at(x, start)
         outside = (r == 0) | ~(x <= self.nodes[-1])  # NaN is outside too
         if outside.any():
             w[outside] = np.nan
         return start, w
+
+    def weights_at(self, x, start) -> np.ndarray:
+        """Weights (N, m) of the points ``x`` on the stencils starting at ``start``
+        (centred or not; no check that x lies inside them)."""
+        x = np.asarray(x, dtype=float).reshape(-1)
+        if self.m == 4:
+            return _cubic_weights(x, start, self._columns)
+        table = self._table[start]  # (N, 2m)
+        w = _numerators(x[:, None] - table[:, :self.m])
+        w /= table[:, self.m:]
+        return w
 
 
 def interpolate_pressure(space: GriddedSpace, pressure_mbar) -> GriddedSpace:
@@ -371,11 +376,6 @@ class SpaceInterpolant:
             stencils.reshape(self.axis_d.n_starts * self.axis_h.n_starts, md * mh, u)
         )
         self.n_points = u
-        # columns of the tensor-product weights, in the order of the stencil rows
-        self._outer_d = np.repeat(np.arange(md), mh)
-        self._outer_h = np.tile(np.arange(mh), md)
-        if md == mh:
-            self._table = np.concatenate([self.axis_d._table, self.axis_h._table])
         self._n_stencils = self._stencils.shape[0]
         self._work = np.empty((0, u))
         self._cell_starts = None  # (n1 + 1, n2 + 1, 2): stencil starts by searchsorted result
@@ -463,49 +463,22 @@ class SpaceInterpolant:
         return out
 
     def _basis(self, x):
-        """Stencil starts (N,), (N,) and tensor-product weights (N, md * mh)."""
-        ad, ah = self.axis_d, self.axis_h
-        if self._cell_starts is not None:
-            return self._basis_from_starts(x)
-        if ad.m != ah.m or ad.m == 4:
-            sd, wd = ad.weights(x[:, 0])
-            sh, wh = ah.weights(x[:, 1])
-            # the tensor product, rows in the order of the stencil (d outer, h inner)
-            return sd, sh, (wd[:, :, None] * wh[:, None, :]).reshape(x.shape[0], -1)
-        # both axes at once: one gather, one numerator evaluation for 2N points
-        n, m = x.shape[0], ad.m
-        xd, xh = x[:, 0], x[:, 1]
-        rd = np.searchsorted(ad.nodes, xd, side="right")
-        rh = np.searchsorted(ah.nodes, xh, side="right")
-        sd, sh = ad._start_of[rd], ah._start_of[rh]
-        table = self._table[np.concatenate([sd, sh + ad.n_starts])]  # (2N, 2m)
-        w = _numerators(np.concatenate([xd, xh])[:, None] - table[:, :m])
-        w /= table[:, m:]
-        basis = w[:n, self._outer_d] * w[n:, self._outer_h]
-        outside = (rd == 0) | ~(xd <= ad.nodes[-1]) | (rh == 0) | ~(xh <= ah.nodes[-1])
-        if outside.any():
-            basis[outside] = np.nan
-        return sd, sh, basis
+        """Stencil starts (N,), (N,) and tensor-product weights (N, md * mh).
 
-    def _basis_from_starts(self, x):
-        """As :meth:`_basis`, with the stencil starts of ``_cell_starts`` (NaN policy "shift")."""
+        The starts are the centred ones, or with NaN policy "shift" those of
+        ``_cell_starts`` (NaN-free stencils that hold the cell)."""
         ad, ah = self.axis_d, self.axis_h
         xd, xh = x[:, 0], x[:, 1]
         rd = np.searchsorted(ad.nodes, xd, side="right")
         rh = np.searchsorted(ah.nodes, xh, side="right")
-        starts = self._cell_starts[rd, rh]
-        sd, sh = starts[:, 0], starts[:, 1]
-        basis = []
-        for axis, xi, si in ((ad, xd, sd), (ah, xh, sh)):
-            if axis.m == 4:
-                basis.append(_cubic_weights(xi, si, axis._columns))
-                continue
-            table = axis._table[si]
-            w = _numerators(xi[:, None] - table[:, : axis.m])
-            w /= table[:, axis.m:]
-            basis.append(w)
+        if self._cell_starts is not None:
+            starts = self._cell_starts[rd, rh]
+            sd, sh = starts[:, 0], starts[:, 1]
+        else:
+            sd, sh = ad._start_of[rd], ah._start_of[rh]
+        wd, wh = ad.weights_at(xd, sd), ah.weights_at(xh, sh)
         # the tensor product, rows in the order of the stencil (d outer, h inner)
-        basis = (basis[0][:, :, None] * basis[1][:, None, :]).reshape(x.shape[0], -1)
+        basis = (wd[:, :, None] * wh[:, None, :]).reshape(x.shape[0], -1)
         outside = (rd == 0) | ~(xd <= ad.nodes[-1]) | (rh == 0) | ~(xh <= ah.nodes[-1])
         if outside.any():
             basis[outside] = np.nan

@@ -14,22 +14,10 @@ import math
 
 import numpy as np
 
-from ._interpolate import GriddedSpace, LagrangeAxis, SpaceInterpolant, _cubic_weights, _numerators
+from ._interpolate import GriddedSpace, LagrangeAxis, SpaceInterpolant
 from ._rays import RaySpace
 
 __all__ = ["RayInterpolant", "NeoHookeanSlice", "TabulatedInterpolant"]
-
-
-def _weights_at(axis: LagrangeAxis, x, start) -> np.ndarray:
-    """Lagrange weights of the stencils starting at ``start`` (not necessarily centred)."""
-
-    m = axis.m
-    if m == 4:
-        return _cubic_weights(np.asarray(x, dtype=float), start, axis._columns)
-    table = axis._table[start]
-    w = _numerators(np.asarray(x, dtype=float)[:, None] - table[:, :m])
-    w /= table[:, m:]
-    return w
 
 
 def _alternative_starts(axis: LagrangeAxis, x, centred):
@@ -117,12 +105,12 @@ class RayInterpolant:
 
         ``wr``, ``wc``: the weights of these starts, if already known."""
         if wr is None:
-            wr = _weights_at(self._axis_r, theta[:, 1], start_r)
+            wr = self._axis_r.weights_at(theta[:, 1], start_r)
         rows = start_r[:, None] + np.arange(self._axis_r.m)  # rows of the (r, c) table
         w = wr
         if self.d == 3:
             if wc is None:
-                wc = _weights_at(self._axis_c, theta[:, 2], start_c)
+                wc = self._axis_c.weights_at(theta[:, 2], start_c)
             n_c = self._g.shape[1]
             rows = (rows[:, :, None] * n_c + start_c[:, None, None]
                     + np.arange(self._axis_c.m)).reshape(len(theta), -1)
@@ -133,7 +121,8 @@ class RayInterpolant:
         out = np.einsum("nk,nkp->np", w, stencil)
         # a ray with weight exactly 0 (the candidate sits on a node) is ignored, so a
         # neighbouring ray that stopped early does not spoil a node (NaN * 0 = NaN)
-        redo = np.flatnonzero(np.isnan(out).any(axis=1) & (w == 0.0).any(axis=1))
+        redo = np.flatnonzero(np.isnan(out).any(axis=1))
+        redo = redo[(w[redo] == 0.0).any(axis=1)]
         if redo.size:
             zeroed = np.where((w[redo] == 0.0)[:, :, None], 0.0, stencil[redo])
             out[redo] = np.einsum("nk,nkp->np", w[redo], zeroed)
@@ -218,7 +207,7 @@ class RayInterpolant:
                 ok = (s >= 0) & (s + m - 2 >= cell)
                 if not ok.any():
                     break
-                ws = _weights_at(self._axis_p, qh[ok], s[ok])
+                ws = self._axis_p.weights_at(qh[ok], s[ok])
                 ids = s[ok, None] + np.arange(m)
                 alt = np.where(ws == 0.0, 0.0, ws * flat.take(row0[hole[ok], None] + ids)).sum(axis=1)
                 fill = hole[ok]
@@ -337,8 +326,7 @@ class TabulatedInterpolant:
         self._log_m = SpaceInterpolant(table, "shift")
         # the usual protocol has p = 0 first (or not at all): a slice, not a mask
         first = int(np.argmax(self._pos)) if self._pos.any() else self._pos.size
-        self._positive = (slice(first, None) if self._pos[first:].all() and not self._pos[:first].any()
-                          else self._pos)
+        self._positive = slice(first, None) if self._pos[first:].all() else self._pos
         self._buffer = np.empty((0, int(self._pos.sum())))
 
     def __call__(self, candidates, out=None) -> np.ndarray:
