@@ -199,6 +199,28 @@ def test_a_run_that_cannot_finish_returns_its_partial_curve():
     assert curve.last_converged_mbar == curve.pressure_mbar[finite][-1]
 
 
+def test_an_output_pressure_just_after_another_costs_one_increment(monkeypatch):
+    # an increment cut short by an output pressure must not set the size of the next
+    # one: growing back from a 0.001 mbar sliver by doubling took about 10 increments
+    # (and after a cut-back near an output pressure the sliver was 1e-12 mbar, 40)
+    calls = []
+    residual = SuctionTest._residual
+    monkeypatch.setattr(SuctionTest, "_residual", lambda self: calls.append(1) or residual(self))
+    coarse = dict(**REFERENCE, probe_mm=6, mesh={"refinement": 0.5})
+    even = [0.0, 10.0, 20.0, 30.0, 40.0]
+    sliver = [0.0, 10.0, 10.001, 20.0, 30.0, 40.0]
+    counts, curves = [], []
+    for p in (even, sliver):
+        calls.clear()
+        curves.append(SuctionTest(**coarse).run(pressures_mbar=p))
+        counts.append(len(calls))
+    assert curves[0].converged and curves[1].converged
+    # the same equilibria, to the Newton tolerance
+    np.testing.assert_allclose(curves[1].deflection_mm[[0, 1, 3, 4, 5]],
+                               curves[0].deflection_mm, rtol=1e-5)
+    assert counts[1] <= counts[0] + 6  # one more short increment and its residuals
+
+
 def test_invalid_input_names_the_parameter():
     with pytest.raises(ValueError, match="x1d"):
         simulate(-0.01, 1e-4)

@@ -218,12 +218,15 @@ class SuctionTest:
         K = fem.tools.jac(self.items, self.field).tocsr()
         return _factorize(K[self.dof1][:, self.dof1])
 
-    def _equilibrium(self, pressure_mbar, lu, tol, maxiter, xtol=1e-9, f=None):
+    def _equilibrium(self, pressure_mbar, lu, tol, maxiter, xtol=1e-9, f=None,
+                     stall_after=16, stall_window=4):
         """Newton iterations at one pressure, in place on the displacement field.
 
         The factorised tangent ``lu`` is reused while the residual contracts fast
         (modified Newton) and refreshed when it does not; a step that inverts an
-        element (non-finite residual) is halved before it is accepted.
+        element (non-finite residual) is halved before it is accepted. An increment
+        whose residual has not halved in ``stall_window`` iterations, after
+        ``stall_after``, is given up (the caller cuts it back).
         ``f`` is the residual of the current state at this pressure, if known.
         Returns the tangent in use and the number of iterations.
         """
@@ -233,6 +236,7 @@ class SuctionTest:
         if f is None:
             f = self._residual()
         norm_before = np.inf
+        history = []
         for iteration in range(1, maxiter + 1):
             if not np.all(np.isfinite(f)):
                 raise NoEquilibrium("an element is inverted", iteration - 1)
@@ -241,6 +245,15 @@ class SuctionTest:
             reactions = np.linalg.norm(f[self.dof0])
             if norm_r1 <= tol * reactions:
                 return lu, iteration - 1
+            history.append(norm_r1)
+            # full Newton from the 5th iteration on contracts a sound increment
+            # quadratically; one that has not halved its residual in 4 of them
+            # wanders (a limit point, an element about to invert): a smaller
+            # increment is cheaper than the rest of maxiter
+            if iteration > stall_after and norm_r1 > 0.5 * min(history[:-stall_window]):
+                raise NoEquilibrium(
+                    f"no contraction in {stall_window} iterations", iteration - 1
+                )
             # the tangent of an earlier increment serves while it contracts the
             # residual well: M(p) is close to linear, so refactorising is rare
             if lu is None or norm_r1 > 0.5 * norm_before or iteration > 4:
@@ -314,24 +327,33 @@ class SuctionTest:
                         f"{iteration_budget} spent)"
                     )
                     break
-                dp = min(dp, target - p_now)
+                remaining = target - p_now
+                if remaining <= 1e-6 * nominal:
+                    # round-off of the sum of cut-back increments: the equilibrium
+                    # is this pressure's to 1e-6 of an increment (a solve here would
+                    # also make the next increment start from this sliver)
+                    p_now = target
+                    break
+                clipped = remaining <= dp
+                step = remaining if clipped else dp
+                p_next = target if clipped else p_now + step
                 # linear extrapolation of the last converged increment, unless it
                 # inverts an element (then Newton starts from the last equilibrium)
-                scale = dp / dp_last if dp_last > 0 else 0.0
+                scale = step / dp_last if dp_last > 0 else 0.0
                 u[:] = u_now + scale * (u_now - u_before)
-                self.suction.update(-(p_now + dp) * MBAR_TO_MPA)
+                self.suction.update(-p_next * MBAR_TO_MPA)
                 with np.errstate(all="ignore"):
                     f = self._residual()
                 if not np.all(np.isfinite(f)):
                     u[:], f = u_now, None
                 try:
                     with np.errstate(all="ignore"):
-                        lu, used = self._equilibrium(p_now + dp, lu, tol, maxiter, f=f)
+                        lu, used = self._equilibrium(p_next, lu, tol, maxiter, f=f)
                     iterations += used
                 except (NoEquilibrium, RuntimeError, ValueError, np.linalg.LinAlgError) as err:
                     # the budget counts the iterations spent, not the ones allowed
                     iterations += getattr(err, "iterations", maxiter)
-                    lu, dp = None, dp / 4
+                    lu, dp = None, step / 4
                     if dp < min_increment_mbar:
                         reason = (
                             f"no equilibrium above {p_now:g} mbar (increment cut back "
@@ -342,8 +364,11 @@ class SuctionTest:
                 for item in self.items:
                     item.results.update_statevars()
                 u_before, u_now = u_now, u.copy()
-                p_now, dp_last = p_now + dp, dp
-                dp = min(2 * dp, nominal)
+                p_now, dp_last = p_next, step
+                # an increment cut short by an output pressure says nothing of the
+                # increment size: it stays (doubling from a sliver would creep)
+                if not clipped:
+                    dp = min(2 * dp, nominal)
             if reason:
                 break
             deflection[k] = self.apex_deflection()
