@@ -9,7 +9,6 @@ import io
 import json
 import shutil
 import subprocess
-import sys
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -71,11 +70,14 @@ def test_commands_registry_is_the_parser():
 
 # ------------------------------------------------------------------ simulate
 def fake_simulate(calls, converge=True):
-    def simulate(x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom, pressures_mbar=None, mesh=None):
+    def simulate(x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom, pressures_mbar=None, mesh=None,
+                 progress=None):
         calls.append(dict(x1d=x1d, x1h=x1h, x2d=x2d, x2h=x2h, t_d=t_d, t_h=t_h,
                           probe_mm=probe_mm, bottom=bottom, pressures_mbar=pressures_mbar,
                           mesh=mesh))
         p = np.arange(0.0, 101.0, 2.0)
+        for k in range(1, p.size):
+            progress(k, p.size - 1, p[k])
         m = 0.01 * p
         last = 100.0
         if not converge:
@@ -103,6 +105,56 @@ def test_simulate_prints_the_curve_with_the_solver_note(monkeypatch, capsys):
     frame = pd.read_csv(io.StringIO(out), comment="#")
     assert list(frame.columns) == ["pressure_mbar", "deflection_mm"]
     assert len(frame) == 51 and frame["deflection_mm"].iloc[-1] == pytest.approx(1.0)
+
+
+class FakeTerminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_progress_draws_a_bar_on_a_terminal_and_writes_lines_in_a_log():
+    from skinsuction import Progress
+
+    tty = FakeTerminal()
+    bar = Progress(4, "simulate", "pressures", stream=tty)
+    for k in range(4):
+        bar.step(note=f"{25 * (k + 1)} mbar")
+    assert tty.getvalue().count("\r") == 4 and tty.getvalue().endswith("\n")
+    assert "simulate [##############################] 4/4" in tty.getvalue()
+    assert "100 mbar" in tty.getvalue()
+
+    log = io.StringIO()
+    bar = Progress(4, "rays", "bundles", stream=log, every=3600.0)
+    for _ in range(4):
+        bar.step()
+    # the first step and the last: nothing in between within the hour
+    lines = log.getvalue().splitlines()
+    assert len(lines) == 2 and "\r" not in log.getvalue()
+    assert lines[0].startswith("rays: 1/4 bundles (25 %)")
+    assert lines[1].startswith("rays: 4/4 bundles (100 %)")
+
+    quiet = io.StringIO()
+    bar = Progress(4, "simulate", stream=quiet, quiet_below=3600.0)
+    for _ in range(4):
+        bar.step()
+    assert quiet.getvalue() == ""  # a quick run says nothing
+
+    stopped = FakeTerminal()
+    bar = Progress(4, "simulate", stream=stopped)
+    bar.step()
+    bar.close()
+    assert stopped.getvalue().endswith("\n")  # a run that stopped early ends its line
+
+
+def test_simulate_reports_progress_on_a_terminal(monkeypatch, capsys):
+    monkeypatch.setattr("skinsuction.model.simulate", fake_simulate([]))
+    stderr = FakeTerminal()
+    monkeypatch.setattr("sys.stderr", stderr)
+    monkeypatch.setattr(cli, "PROGRESS_QUIET_S", 0.0)  # the fake is instant
+    code, out, _ = run(["simulate", "--probe", 6, "--x1d", 0.08, "--x1h", 4.1e-4], capsys)
+    assert code == 0
+    assert "simulate [" in stderr.getvalue() and "50/50" in stderr.getvalue()
+    assert "100 mbar" in stderr.getvalue()
 
 
 def test_simulate_stopped_early_exits_3_and_still_writes(monkeypatch, capsys, tmp_path):

@@ -221,6 +221,13 @@ def test_an_output_pressure_just_after_another_costs_one_increment(monkeypatch):
     assert counts[1] <= counts[0] + 6  # one more short increment and its residuals
 
 
+def test_the_model_reports_each_pressure_it_reaches():
+    seen = []
+    simulate(**REFERENCE, probe_mm=6, pressures_mbar=[0, 50, 100], mesh={"refinement": 0.5},
+             progress=lambda k, n, p: seen.append((k, n, p)))
+    assert seen == [(1, 2, 50.0), (2, 2, 100.0)]
+
+
 def test_invalid_input_names_the_parameter():
     with pytest.raises(ValueError, match="x1d"):
         simulate(-0.01, 1e-4)

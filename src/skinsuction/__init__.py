@@ -41,8 +41,9 @@ _EXPORTS = {
     "point_id": "skinsuction.space",
     "parse_point_id": "skinsuction.space",
     "convergence_summary": "skinsuction.space",
-    # provenance
+    # provenance, progress of long runs
     "provenance": "skinsuction.provenance",
+    "Progress": "skinsuction._progress",
     # figures
     "plot_fig3": "skinsuction.figures.fig3",
 }

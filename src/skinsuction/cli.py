@@ -144,16 +144,27 @@ def _curve_csv(curve, args) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: seconds before `simulate` shows its progress: a default-mesh curve takes about one
+PROGRESS_QUIET_S = 2.0
+
+
 def _run_simulate(args: argparse.Namespace) -> int:
     from skinsuction import model
+    from skinsuction._progress import Progress
 
+    # a fine mesh takes minutes: a bar on a terminal, a line every 10 s in a log
+    bar = Progress(len(model.DEFAULT_PRESSURES_MBAR) - 1, "simulate", "pressures",
+                   quiet_below=PROGRESS_QUIET_S)
     try:
         curve = model.simulate(
             args.x1d, args.x1h, args.x2d, args.x2h, args.td, args.th, args.probe, args.bottom,
             pressures_mbar=None, mesh={"refinement": args.refinement},
+            progress=lambda k, n, p: bar.step(note=f"{p:g} mbar"),
         )
     except ValueError as err:  # parameters the model refuses
         raise CLIError(f"the model refused the parameters: {err}") from None
+    finally:
+        bar.close()
     text = _curve_csv(curve, args)
     if args.out:
         from skinsuction._files import atomic_output

@@ -5,11 +5,12 @@ from __future__ import annotations
 import datetime as _dt
 import json
 import math
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
+
+from skinsuction._progress import Progress
 
 from ._compare import compare_groups
 
@@ -201,33 +202,6 @@ def _diagnosis_columns(d: dict) -> dict:
 
 
 # ------------------------------------------------------------------ the study
-class _Progress:
-    """A bar on a terminal, a line every ``every`` seconds in a log."""
-
-    def __init__(self, total: int, stream=None, every: float = 10.0):
-        self.total, self.done, self.t0 = total, 0, time.perf_counter()
-        self.stream = stream or sys.stderr
-        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
-        self.every, self.last = every, -math.inf
-
-    def step(self):
-        self.done += 1
-        now = time.perf_counter() - self.t0
-        eta = now / self.done * (self.total - self.done)
-        if self.tty:
-            bar = "#" * int(30 * self.done / self.total)
-            self.stream.write(f"\rstudy [{bar:<30}] {self.done}/{self.total} "
-                              f"{now:.0f} s, {eta:.0f} s left ")
-            if self.done == self.total:
-                self.stream.write("\n")
-            self.stream.flush()
-        elif now - self.last >= self.every or self.done == self.total:
-            self.last = now
-            print(f"study: {self.done}/{self.total} measurements "
-                  f"({100 * self.done / self.total:.0f} %), {now:.0f} s, about {eta:.0f} s left",
-                  file=self.stream, flush=True)
-
-
 def study_rows(entries, *, space, ray_spaces=None, settings=None, repeats: int = 2,
                seed: int = 0, level: float = 0.95, workers: int = 1, reports_dir=None,
                progress=None) -> list:
@@ -236,7 +210,7 @@ def study_rows(entries, *, space, ray_spaces=None, settings=None, repeats: int =
            "repeats": int(repeats), "seed": int(seed), "level": float(level),
            "reports_dir": reports_dir}
     jobs = [(i, e, sha) for i, (e, sha) in enumerate(entries)]
-    bar = _Progress(len(jobs), progress) if progress is not False else None
+    bar = Progress(len(jobs), "study", "measurements", progress) if progress is not False else None
     rows = []
     if workers > 1 and len(jobs) > 1:
         import multiprocessing as mp

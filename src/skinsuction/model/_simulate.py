@@ -280,6 +280,7 @@ class SuctionTest:
         maxiter=25,
         min_increment_mbar=0.01,
         iteration_budget=None,
+        progress=None,
     ):
         """Solve for each pressure, with an extrapolated predictor and cutback.
 
@@ -299,6 +300,9 @@ class SuctionTest:
         iteration_budget : int, optional
             Total Newton iterations before giving up (default 20 per pressure step),
             so that a hopeless point costs a bounded time.
+        progress : callable, optional
+            Called as ``progress(k, n, pressure_mbar)`` after the k-th of the n
+            pressures after 0 is reached (e.g. :class:`skinsuction.Progress`'s bar).
         """
         start = time.perf_counter()
         p_out = (
@@ -372,6 +376,8 @@ class SuctionTest:
             if reason:
                 break
             deflection[k] = self.apex_deflection()
+            if progress is not None:
+                progress(k, len(p_out) - 1, float(target))
 
         u[:] = u_now
         self._residual()  # leave the bodies' stored state at the last equilibrium
@@ -405,6 +411,7 @@ def simulate(
     mesh=None,
     prestretch=1.0,
     iteration_budget=None,
+    progress=None,
 ):
     """Apex deflection M(p) of a two-layer skin model under a suction probe.
 
@@ -432,6 +439,8 @@ def simulate(
         skin. 1 is none.
     iteration_budget : int, optional
         Newton iterations before the solver gives up (default 20 per pressure).
+    progress : callable, optional
+        Called as ``progress(k, n, pressure_mbar)`` after each pressure reached.
 
     Returns
     -------
@@ -448,4 +457,4 @@ def simulate(
     model = SuctionTest(
         x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom, mesh, prestretch=prestretch
     )
-    return model.run(pressures_mbar, iteration_budget=iteration_budget)
+    return model.run(pressures_mbar, iteration_budget=iteration_budget, progress=progress)

@@ -14,6 +14,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from skinsuction._progress import Progress
+
 from ._causes import BASELINE
 from ._rays import EXTRA_KEYWORDS, RaySpec, assemble_ray_space, parse_ray_id, ray_bundles
 from ._solve import solve_with_fallbacks
@@ -107,13 +109,14 @@ def compute_bundle(ray_ids, path, pressures_mbar, mesh: dict | None = None, fall
 
 
 def build_ray_spaces(spec: RaySpec, causes: dict, out_dir=None, workers: int = 1,
-                     config=None) -> dict:
+                     config=None, progress=None) -> dict:
     """Run every bundle in this process (or a pool) and return ``{name: RaySpace}``.
 
     For tests, notebooks and benchmarks; the workflow runs one job per bundle.
     With ``out_dir`` the bundle and space files are written there
     (``out_dir/rays/<bundle>.parquet``, ``out_dir/<name>.parquet``); bundle files
-    already present are reused.
+    already present are reused. Progress goes to ``progress`` (a stream; default
+    stderr): a bar on a terminal, a line every 10 s otherwise.
     """
     import tempfile
 
@@ -127,14 +130,18 @@ def build_ray_spaces(spec: RaySpec, causes: dict, out_dir=None, workers: int = 1
     jobs = [(ids, str(out / "rays" / f"{bid}.parquet"), spec.pressures_mbar, spec.mesh,
              list(spec.fallback), spec.onset_mbar)
             for bid, ids in bundles.items() if not (out / "rays" / f"{bid}.parquet").exists()]
+    # minutes to hours: a bar on a terminal, a line every 10 s in a log
+    bar = Progress(len(jobs), "rays", "bundles", stream=progress, quiet_below=2.0)
     if workers > 1 and len(jobs) > 1:
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(workers) as pool:
-            list(pool.map(_compute_bundle_job, jobs))
+            for path in pool.map(_compute_bundle_job, jobs):
+                bar.step(note=Path(path).stem)
     else:
         for job in jobs:
-            _compute_bundle_job(job)
+            bar.step(note=Path(_compute_bundle_job(job)).stem)
+    bar.close()
     paths = [out / "rays" / f"{bid}.parquet" for bid in bundles]
     spaces = {}
     for name, cause in {BASELINE: None, **causes}.items():
