@@ -17,7 +17,8 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 PACKAGE = SRC / "skinsuction"
 
 LAYERS = [
-    {"errors", "_files", "_threads", "_argtypes", "provenance", "noise", "config", "measured"},
+    {"errors", "_files", "_threads", "_argtypes", "_progress", "provenance", "noise", "config",
+     "measured"},
     {"model"},
     {"space"},
     {"figures"},
