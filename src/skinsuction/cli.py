@@ -144,7 +144,7 @@ def _curve_csv(curve, args) -> str:
     return "\n".join(lines) + "\n"
 
 
-#: seconds before `simulate` shows its progress: a default-mesh curve takes about one
+#: seconds before `simulate` shows its progress (a default-mesh curve takes about 1 s)
 PROGRESS_QUIET_S = 2.0
 
 

@@ -235,8 +235,7 @@ class SuctionTest:
         u = self.field[0].values.reshape(-1)
         if f is None:
             f = self._residual()
-        norm_before = np.inf
-        history = []
+        history = []  # residual norms of this increment's iterations
         for iteration in range(1, maxiter + 1):
             if not np.all(np.isfinite(f)):
                 raise NoEquilibrium("an element is inverted", iteration - 1)
@@ -256,10 +255,9 @@ class SuctionTest:
                 )
             # the tangent of an earlier increment serves while it contracts the
             # residual well: M(p) is close to linear, so refactorising is rare
-            if lu is None or norm_r1 > 0.5 * norm_before or iteration > 4:
+            if lu is None or iteration > 4 or (iteration > 1 and norm_r1 > 0.5 * history[-2]):
                 lu = self._tangent()
             du = lu.solve(-r1)
-            norm_before = norm_r1
             u_start = u[self.dof1].copy()
             for _ in range(6):
                 u[self.dof1] = u_start + du
