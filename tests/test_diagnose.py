@@ -542,3 +542,31 @@ def test_a_short_curve_is_a_located_input_error(noise_um, tmp_path):
     with pytest.raises(InputError) as err:
         diagnose(load_measured(path), toy_spaces(), Settings(noise_um=noise_um))
     assert "short.csv" in str(err.value) and "2 points above 0 mbar" in str(err.value)
+
+
+# ------------------------------------------------------------ the confusion draws
+def test_confusion_draws_in_worker_processes_equal_one_process(monkeypatch):
+    """The detectability rule runs its draws in a pool: same rows, same order, same
+    seeds as one process (each draw depends on its seed only)."""
+    import io
+    import os
+
+    from skinsuction.diagnose import _confusion
+
+    def fake_draw(truth, seed, spaces, settings=None, domain=None, cache_dir=None):
+        rng = np.random.default_rng(seed)  # a stand-in for the FE runs and the fit
+        return {"truth": truth, "seed": seed, "value": float(rng.normal()),
+                "named": truth, "pid": os.getpid(), "n_spaces": len(spaces)}
+
+    monkeypatch.setattr(_confusion, "run_draw", fake_draw)
+    spaces = {BASELINE: None, "strain_stiffening": None, "pre_tension": None}
+    one = _confusion.run_draws(spaces, 3, seed=7, workers=1)
+    log = io.StringIO()
+    pool = _confusion.run_draws(spaces, 3, seed=7, workers=2, progress=log)
+    cols = ["truth", "seed", "value", "named", "n_spaces"]
+    assert one[cols].equals(pool[cols])
+    assert one["seed"].tolist() == [7, 8, 9, 100007, 100008, 100009, 200007, 200008, 200009]
+    assert one["truth"].tolist() == ["none"] * 3 + ["strain_stiffening"] * 3 + ["pre_tension"] * 3
+    assert set(one["pid"]) == {os.getpid()}
+    assert os.getpid() not in set(pool["pid"])  # the pool's workers drew them
+    assert "detectability: 9/9 draws" in log.getvalue()

@@ -343,7 +343,7 @@ if "diagnosis" in config:
                 decision=DG.get("decision", {}),
                 fit=DG.get("fit", {}),
                 code=code_hash("diagnose", "identify", "model", "figures", *SPACE_CODE),
-            threads: 1
+            threads: 2
             resources:
                 mem_mb=3000,
                 runtime=120,

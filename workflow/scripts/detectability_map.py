@@ -1,15 +1,16 @@
 """Rule detectability_map: the diagnosis over the physiological domain (confusion, map)."""
 
-# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
-# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
+# One process per thread, each with single-threaded BLAS/OpenMP pools: set before
+# NumPy is imported (the Snakemake preamble does not import it; skinsuction's
+# __init__ is lazy).
 from skinsuction._threads import limit_threads
 
-limit_threads(snakemake.threads)
+limit_threads(1)
 
 from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
-    from pathlib import Path
+    import sys
 
     from skinsuction.diagnose import Settings
     from skinsuction.space import read_ray_space
@@ -19,7 +20,8 @@ with log_to_file(snakemake.log[0]):
 
     spaces = {s.name: s for s in map(read_ray_space, snakemake.input.spaces)}
     settings = Settings.from_config(snakemake.params.decision, snakemake.params.fit)
-    rows = run_draws(spaces, snakemake.params.per_cause, snakemake.params.seed, settings)
+    rows = run_draws(spaces, snakemake.params.per_cause, snakemake.params.seed, settings,
+                     workers=snakemake.threads, progress=sys.stderr)
     write_table(rows, snakemake.output.draws)
     s = summarise(rows, [n for n in spaces if n != "neo_hookean"])
     write_table(s["detectable"].reset_index(), snakemake.output.matrix)

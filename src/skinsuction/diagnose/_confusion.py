@@ -252,15 +252,50 @@ def summarise(rows: pd.DataFrame, causes) -> dict:
     return out
 
 
-def run_draws(spaces: dict, per_cause: int, seed: int = 1000, settings=None) -> pd.DataFrame:
+_SHARED: dict = {}
+
+
+def _run_shared(job):
+    truth, seed = job
+    return run_draw(truth, seed, _SHARED["spaces"], _SHARED["settings"])
+
+
+def run_draws(spaces: dict, per_cause: int, seed: int = 1000, settings=None,
+              workers: int = 1, progress=None) -> pd.DataFrame:
     """``per_cause`` draws for ``none`` and every cause of ``spaces``: one row each.
 
     Seeds are ``seed + 100000 k + i`` for the k-th true cause (``none`` first), as in
-    ``benchmarks/diagnose_confusion.py``.
+    ``benchmarks/diagnose_confusion.py``.  Each draw depends on its seed only, so
+    ``workers`` processes (forked: they share the spaces) give the same rows, in the
+    same order, as one.  ``progress``: a stream for a :class:`skinsuction.Progress`
+    bar (a terminal) or periodic lines (a log).
     """
+    from skinsuction._progress import Progress
+
     causes = [n for n in spaces if n != BASELINE]
-    rows = [run_draw(truth, seed + 100000 * k + i, spaces, settings)
+    jobs = [(truth, seed + 100000 * k + i)
             for k, truth in enumerate([NONE, *causes]) for i in range(int(per_cause))]
+    bar = Progress(len(jobs), "detectability", "draws", progress) if progress else None
+    _SHARED.update(spaces=spaces, settings=settings)
+    rows = []
+    try:
+        if workers > 1 and len(jobs) > 1:
+            import multiprocessing as mp
+
+            with mp.get_context("fork").Pool(workers) as pool:
+                for row in pool.imap(_run_shared, jobs, chunksize=1):
+                    rows.append(row)
+                    if bar:
+                        bar.step()
+        else:
+            for job in jobs:
+                rows.append(_run_shared(job))
+                if bar:
+                    bar.step()
+    finally:
+        _SHARED.clear()
+        if bar:
+            bar.close()
     df = pd.DataFrame(rows)
     for col in ("cpu_seconds", "wall_seconds", "verdict", "detectable"):
         if col not in df:
