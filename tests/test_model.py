@@ -221,6 +221,30 @@ def test_an_output_pressure_just_after_another_costs_one_increment(monkeypatch):
     assert counts[1] <= counts[0] + 6  # one more short increment and its residuals
 
 
+def test_tangents_factorised_in_the_kept_order_give_the_same_curve(monkeypatch):
+    # the fill-reducing order of the first tangent serves every later one: the same
+    # equilibria as ordering each tangent anew; the order is found again only when
+    # the pattern changes (here once: the tangent at rest lacks a few entries)
+    from skinsuction.model import _simulate
+
+    coarse = dict(x1d=0.01, x1h=1e-3, probe_mm=6, mesh={"refinement": 0.5})
+    pressures = np.linspace(0.0, 100.0, 11)
+    kept = SuctionTest(**coarse).run(pressures)
+    orderings = []
+    plain = _simulate._factorize
+    monkeypatch.setattr(_simulate, "_factorize", lambda A: orderings.append(1) or plain(A))
+    SuctionTest(**coarse).run(pressures)
+    fresh = []
+    monkeypatch.setattr(
+        _simulate.TangentFactorizer, "__call__",
+        lambda self, K: fresh.append(1) or plain(K.tocsr()[self.free][:, self.free]),
+    )
+    anew = SuctionTest(**coarse).run(pressures)
+    assert kept.converged and anew.converged
+    assert len(orderings) <= 2 and len(fresh) >= 4 * len(orderings)
+    np.testing.assert_allclose(kept.deflection_mm, anew.deflection_mm, rtol=1e-9, atol=0)
+
+
 def test_the_model_reports_each_pressure_it_reaches():
     seen = []
     simulate(**REFERENCE, probe_mm=6, pressures_mbar=[0, 50, 100], mesh={"refinement": 0.5},
