@@ -137,3 +137,28 @@ def test_the_checker_sees_an_upward_import(tmp_path):
         "skinsuction.space", "skinsuction.space.read_space"]
     fake.write_text("from ._curve import Curve\nfrom skinsuction import errors\n")
     assert upward("skinsuction.model._x", fake, tmp_path) == []
+
+
+def test_an_fe_job_imports_nothing_above_the_space():
+    # the layers hold at run time too: an FE job (the code of simulate_point and
+    # simulate_ray_bundle) must not import identification or diagnosis through the
+    # package's lazy flat API (`from skinsuction import model` once imported
+    # skinsuction.identify and SciPy's stats: about 1 s of every FE job)
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from skinsuction.space import compute_point, compute_bundle\n"
+        "from skinsuction import model\n"
+        "import skinsuction.space._solve, skinsuction.space._ray_solve\n"
+        "print(' '.join(sorted(sys.modules)))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env={**__import__("os").environ, "PYTHONPATH": str(SRC)})
+    loaded = set(out.stdout.split())
+    assert "skinsuction.model" in loaded and "skinsuction.space" in loaded
+    above = {m for m in loaded if m.split(".")[:2][-1] in {
+        "identify", "diagnose", "paper", "cohort", "cli", "figures"}}
+    assert not above, above
+    assert "scipy.stats" not in loaded

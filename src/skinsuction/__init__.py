@@ -68,7 +68,24 @@ def _find(name):
     return None
 
 
+def _submodule(name):
+    """The subpackage or module ``skinsuction.<name>``, imported, or None."""
+    import sys
+    from importlib.util import find_spec
+
+    full = f"{__name__}.{name}"
+    if full in sys.modules:
+        return sys.modules[full]
+    return _import_module(full) if find_spec(full) is not None else None
+
+
 def __getattr__(name):
+    # `from skinsuction import model` asks for the attribute first: a subpackage must
+    # not send it through the flat API's search, which imports skinsuction.identify and
+    # SciPy's stats (about 1 s, every FE job paid it)
+    sub = None if name.startswith("_") or name in _EXPORTS else _submodule(name)
+    if sub is not None:
+        return sub
     module = _EXPORTS.get(name) or _find(name)
     if module is None:
         raise AttributeError(f"module 'skinsuction' has no attribute {name!r}")
