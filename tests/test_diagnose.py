@@ -570,3 +570,27 @@ def test_confusion_draws_in_worker_processes_equal_one_process(monkeypatch):
     assert set(one["pid"]) == {os.getpid()}
     assert os.getpid() not in set(pool["pid"])  # the pool's workers drew them
     assert "detectability: 9/9 draws" in log.getvalue()
+
+
+def test_confusion_rates_over_distinguishable_draws():
+    """The rates separate the misses a diagnosis could avoid from those another cause
+    mimics: six detectable thickness draws, two of them mimicked by pre-tension."""
+    import pandas as pd
+
+    from skinsuction.diagnose._confusion import summarise
+
+    T, P = "dermis_thickness", "pre_tension"
+    rows = pd.DataFrame({
+        "truth": [T] * 7,
+        "named": [T, T, T, P, P, "none", "none"],
+        "verdict": ["cause_found"] * 5 + ["unexplained_misfit", "neo_hookean_fits"],
+        "detectable": [True] * 6 + [False],
+        "distinguishable": [True, True, True, False, True, False, True],
+        "ambiguous_with": ["", "", P, T, "", "", ""],
+        "x1d": 0.01, "ext_x1d": 0.01, "value": 1.0, "ext_value": 1.0, "base_x1d": 0.01,
+    })
+    r = summarise(rows, [T, P])["rates"].set_index("truth").loc[T]
+    assert r["detectable"] == 6 and r["named_right"] == pytest.approx(3 / 6)
+    assert r["distinguishable"] == 4  # of the detectable: rows 0, 1, 2 and 4
+    assert r["named_right_distinguishable"] == pytest.approx(3 / 4)
+    assert r["right_or_tied"] == pytest.approx(4 / 6)  # row 3 has the truth in the tie

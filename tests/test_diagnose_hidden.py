@@ -223,3 +223,23 @@ def test_wide_domain_effect_is_named_where_detectable(ci_spaces, cause, seed):
         assert row["named"] == cause or cause in tied, row
     else:
         assert row["named"] in (NONE, cause), row
+
+
+def test_rivals_of_a_cause_are_fitted_on_its_noise_free_curves(ci_spaces):
+    """The confusion benchmark asks, per draw, whether another cause can mimic the
+    true one.  The true cause's model holds the neo-Hookean one (its neutral value),
+    so on the noise-free curves it fits at least as well; the rival is another cause,
+    and the draw is distinguishable exactly when the gap reaches the tie rule's."""
+    from skinsuction.diagnose import Settings
+    from skinsuction.space import read_ray_spaces
+    from skinsuction.diagnose._confusion import run_draw
+
+    space_dir, spec, causes, _ = ci_spaces
+    spaces = read_ray_spaces(space_dir)
+    settings = Settings(repeats=1)
+    row = run_draw("pre_tension", 32, spaces, settings, CI_DOMAIN)
+    assert row["named"] != "fe_failed", row
+    assert row["own_chi2"] <= row["clean_chi2"] * (1 + 1e-6) + 1e-6, row
+    assert row["rival"] in set(spaces) - {"neo_hookean", "pre_tension"}, row
+    assert row["rival_gap"] == pytest.approx(row["rival_chi2"] - row["own_chi2"])
+    assert row["distinguishable"] == (row["rival_gap"] >= settings.ambiguity_bic)

@@ -11,7 +11,11 @@ and the effect is detectable when what the neo-Hookean model cannot absorb
 would earn the extra parameter against pure noise (chi^2 of that misfit at
 least ``-delta_bic + ln n``, the rule's threshold) and forms a pattern the
 smooth-residual test sees.  The matrix is then reported over the detectable
-draws, with the detectable fraction per cause (:func:`summarise`).
+draws, with the detectable fraction per cause (:func:`summarise`).  A detectable
+cause may still be mimicked by another: every cause is fitted to the same
+noise-free curves, and the draw is *distinguishable* when the best other cause
+stays at least the tie rule's BIC gap (``ambiguity_bic``) behind the true one
+(:func:`_rivals`); the right-cause rate is reported over those draws too.
 """
 
 from __future__ import annotations
@@ -77,8 +81,9 @@ def draw_wide(seed: int, cause, domain=None, load_max=None) -> dict:
     return out
 
 
-def _detectability(ve, spaces, settings, n_points):
-    """Best neo-Hookean fit to the noise-free true curves: chi^2, E, pattern test."""
+def _detectability(ve, spaces, settings, n_points, truth=None):
+    """Best neo-Hookean fit to the noise-free true curves: chi^2, E, pattern test;
+    for a cause, also how well each other cause mimics it (:func:`_rivals`)."""
     from ._fit import FitData, fit_model
     from ._stats import misfit_test
 
@@ -98,8 +103,46 @@ def _detectability(ve, spaces, settings, n_points):
     sig = {p: fd[p].sigma_um for p in fd}
     t = misfit_test(res, sig, math.inf, settings.degree, settings.alpha)
     threshold = -settings.delta_bic + math.log(n_points)
-    return {"clean_chi2": f.chi2, "clean_E_um": f.E_um, "clean_pattern_p": t.p_value,
-            "detectable": bool(f.chi2 >= threshold and t.significant)}
+    out = {"clean_chi2": f.chi2, "clean_E_um": f.E_um, "clean_pattern_p": t.p_value,
+           "detectable": bool(f.chi2 >= threshold and t.significant)}
+    if truth is not None and truth != NONE:
+        out.update(_rivals(fd, spaces, settings, truth, f.theta))
+    return out
+
+
+def _rivals(fd, spaces, settings, truth, base_theta):
+    """Whether the other causes can tell this one apart, on its noise-free curves.
+
+    Every cause's model (the true one included) is fitted to the noise-free
+    curves, from its window focusing and, as in the diagnosis, from the neo-Hookean
+    fit at the cause's neutral value (so it never fits worse than that).
+    ``rival_gap`` is the chi^2 of the best other cause minus that of the
+    true cause: with one extra parameter each, it is the BIC gap a noise-free
+    measurement would show.  Below ``ambiguity_bic`` even a perfect diagnosis
+    could only report a tie (``ambiguous_with``); noise moves the gap by about
+    2 sqrt(gap).
+    """
+    from skinsuction.identify import IdentificationError
+
+    from ._fit import fit_model
+
+    chi2 = {}
+    for name, space in spaces.items():
+        if name == BASELINE:
+            continue
+        cause = space.cause
+        try:
+            chi2[name] = fit_model(space, fd, seed=0, repeats=1,
+                                   window_focusing_options=settings.window_focusing,
+                                   starts=[[*base_theta, cause.to_axis(cause.neutral)]]).chi2
+        except IdentificationError:  # the cause's space does not cover the curves
+            chi2[name] = math.inf
+    others = {k: v for k, v in chi2.items() if k != truth}
+    rival = min(others, key=others.get) if others else None
+    gap = (others[rival] - chi2[truth]) if rival is not None else math.inf
+    return {"own_chi2": chi2[truth], "rival": rival,
+            "rival_chi2": others.get(rival, math.inf), "rival_gap": gap,
+            "distinguishable": bool(gap >= settings.ambiguity_bic)}
 
 
 def _cache_key(d, mesh) -> dict:
@@ -169,7 +212,7 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     if not ve.converged:
         row["named"] = "fe_failed"
         return row
-    row.update(_detectability(ve, spaces, settings, 2 * int((p > 0).sum())))
+    row.update(_detectability(ve, spaces, settings, 2 * int((p > 0).sum()), truth))
     with tempfile.TemporaryDirectory() as tmp:
         csv = write_csv(ve, Path(tmp) / "v.csv")
         try:
@@ -233,6 +276,7 @@ def summarise(rows: pd.DataFrame, causes) -> dict:
              "detectable_fraction": (len(g) / len(g_all)) if len(g_all) and truth != NONE
              else math.nan,
              "named_right": float((g["named"] == truth).mean()) if len(g) else math.nan,
+             **_distinguishable_rates(g, truth),
              "beyond_space": float((g["verdict"] == "beyond_space").mean()) if len(g) else
              math.nan}
         hit = g[g["named"] == truth]
@@ -250,6 +294,21 @@ def summarise(rows: pd.DataFrame, causes) -> dict:
         rates.append(r)
     out["rates"] = pd.DataFrame(rates)
     return out
+
+
+def _distinguishable_rates(g, truth) -> dict:
+    """Over the detectable draws that the other causes cannot mimic (``rival_gap``):
+    how many, and the fraction named right; empty without the column."""
+    if truth == NONE or "distinguishable" not in g:
+        return {}
+    d = g[g["distinguishable"].fillna(True).astype(bool)]
+    tied = (g["ambiguous_with"] if "ambiguous_with" in g else pd.Series("", index=g.index))
+    tied = tied.fillna("").astype(str).str.split(";").apply(lambda a: truth in a)
+    return {"distinguishable": len(d),
+            "named_right_distinguishable": float((d["named"] == truth).mean()) if len(d)
+            else math.nan,
+            "right_or_tied": float(((g["named"] == truth) | tied).mean()) if len(g)
+            else math.nan}
 
 
 _SHARED: dict = {}

@@ -1,9 +1,11 @@
 """Where each cause is detectable: the draws of the wide-domain confusion benchmark.
 
 One panel per cause: X1d across, the hidden effect up (X2d/X1d, t_d, lambda0),
-each draw a marker: detectable and named right, detectable and named wrong,
-beyond the simulated space, or not detectable (the neo-Hookean model absorbs it
-below the noise); the marker size grows with X1h/X1d.
+each draw a marker: detectable and named right, detectable and named wrong where
+another cause could be told apart, detectable but mimicked by another cause (its
+noise-free curves leave a BIC gap below the tie rule's: no diagnosis can do more
+than report the tie), beyond the simulated space, or not detectable (the
+neo-Hookean model absorbs it below the noise); the marker size grows with X1h/X1d.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ __all__ = ["plot_detectability"]
 _KINDS = {
     "right": ("detectable, named right", "#2e933c", "o"),
     "wrong": ("detectable, named wrong", "#d1495b", "X"),
+    "mimicked": ("mimicked by another cause", "#7b5ea7", "D"),
     "beyond": ("beyond the simulated space", "#f2a541", "s"),
     "hidden": ("not detectable", "#9a9a9a", "."),
 }
@@ -30,7 +33,10 @@ def _kind(row):
         return "beyond"
     if not row["detectable"]:
         return "hidden"
-    return "right" if row["named"] == row["truth"] else "wrong"
+    if row["named"] == row["truth"]:
+        return "right"
+    distinguishable = row.get("distinguishable", True)
+    return "mimicked" if distinguishable is False or distinguishable == 0 else "wrong"
 
 
 def plot_detectability(rows, *paths):
@@ -66,6 +72,6 @@ def plot_detectability(rows, *paths):
                 if lab not in labels:
                     handles.append(h)
                     labels.append(lab)
-        fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=7)
+        fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=7)
         save(fig, *paths)
     return fig
