@@ -9,8 +9,11 @@ direct FE runs on the space's mesh (both probes), written as measured CSV
 files and diagnosed with the default settings.  Each draw is also judged
 detectable or not, independently of the diagnosis (the neo-Hookean model's best
 fit to the noise-free true curves leaves a misfit that would earn an extra
-parameter and forms a pattern).  Prints the confusion matrix over all draws and
-over the detectable ones, the detectable fraction, the rate of the right cause,
+parameter and forms a pattern), and, for a cause, distinguishable or not (every
+cause's model fitted to the same noise-free curves: the best other cause stays at
+least the tie rule's BIC gap behind the true one).  Prints the confusion matrix over
+all draws and over the detectable ones, the detectable fraction, the rate of the
+right cause (over the detectable and over the distinguishable draws, and right or tied),
 the false-alarm rate, the median errors and the time of one diagnosis; writes
 every draw to --out and the detectability map next to it.  Asserts nothing.
 
