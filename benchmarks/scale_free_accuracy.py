@@ -2,6 +2,7 @@
 
     python benchmarks/scale_free_accuracy.py [--space-dir results/simulated_space/scale_free]
         [--points 120] [--seed 0] [--workers 2] [--out benchmarks/out/scale_free_accuracy.csv]
+        [--models pre_tension ...] [--coordinate-range LO HI]
 
 Draws random points across the whole domain of the space (every model, both
 probes, X1h/X1d and the cause's value over their axes, X1d log-uniform in
@@ -58,13 +59,21 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", default="benchmarks/out/scale_free_accuracy.csv")
+    ap.add_argument("--models", nargs="+", default=None,
+                    help="draw only these models (default: every model of the space)")
+    ap.add_argument("--coordinate-range", nargs=2, type=float, default=None,
+                    metavar=("LO", "HI"),
+                    help="draw the cause's value in LO..HI (its own unit, e.g. lambda0 "
+                         "1 1.1) instead of over its whole axis")
     args = ap.parse_args(argv)
 
     from skinsuction.space import read_ray_spaces
     from skinsuction.diagnose._accuracy import draw_points, normalised_error
 
     spaces = read_ray_spaces(args.space_dir)
-    points = draw_points(spaces, args.points, seed=args.seed)
+    drawn = spaces if args.models is None else {m: spaces[m] for m in args.models}
+    points = draw_points(drawn, args.points, seed=args.seed,
+                         coordinate_range=args.coordinate_range)
     t0 = time.perf_counter()
     with ProcessPoolExecutor(args.workers, initializer=_init,
                              initargs=(args.space_dir,)) as pool:

@@ -50,13 +50,15 @@ class AccuracyPoint:
         return np.arange(0.0, self.p_max + 1e-9, self.p_step)
 
 
-def draw_points(spaces: dict, n: int, seed=0, x1d_range=(0.005, 0.15)) -> list:
+def draw_points(spaces: dict, n: int, seed=0, x1d_range=(0.005, 0.15),
+                coordinate_range=None) -> list:
     """``n`` random :class:`AccuracyPoint` across the spaces' whole domain.
 
     The model is drawn evenly among ``spaces``; X1h/X1d log-uniform over the
-    ratio nodes, the cause's axis coordinate uniform over its nodes' span; the
-    protocol among :data:`PROTOCOLS`; X1d log-uniform in ``x1d_range`` raised to
-    the load reach ``p_max / load_max``.
+    ratio nodes, the cause's axis coordinate uniform over its nodes' span (or over
+    ``coordinate_range``, (lo, hi) in the cause's coordinate, e.g. lambda0 1-1.1);
+    the protocol among :data:`PROTOCOLS`; X1d log-uniform in ``x1d_range`` raised
+    to the load reach ``p_max / load_max``.
     """
     rng = np.random.default_rng(seed)
     names = sorted(spaces)
@@ -71,7 +73,10 @@ def draw_points(spaces: dict, n: int, seed=0, x1d_range=(0.005, 0.15)) -> list:
         coord = math.nan
         if s.cause is not None:
             u = s.cause.axis_nodes
-            coord = float(s.cause.from_axis(rng.uniform(u[0], u[-1])))
+            lo_u, hi_u = u[0], u[-1]
+            if coordinate_range is not None:
+                lo_u, hi_u = (s.cause.to_axis(c) for c in coordinate_range)
+            coord = float(s.cause.from_axis(rng.uniform(lo_u, hi_u)))
         p_max, p_step = PROTOCOLS[rng.integers(len(PROTOCOLS))]
         lo = max(x1d_range[0], p_max / spec.load_max)
         hi = max(lo * 1.0001, x1d_range[1])
