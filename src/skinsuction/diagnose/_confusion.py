@@ -128,7 +128,8 @@ def _rivals(fd, spaces, settings, truth, base_theta):
 
     chi2 = {}
     for name, space in spaces.items():
-        if name == BASELINE:
+        # the causes the diagnosis would fit: those whose space has every probe
+        if name == BASELINE or not all(space.has_probe(p) for p in fd):
             continue
         cause = space.cause
         try:
@@ -139,8 +140,8 @@ def _rivals(fd, spaces, settings, truth, base_theta):
             chi2[name] = math.inf
     others = {k: v for k, v in chi2.items() if k != truth}
     rival = min(others, key=others.get) if others else None
-    gap = (others[rival] - chi2[truth]) if rival is not None else math.inf
-    return {"own_chi2": chi2[truth], "rival": rival,
+    gap = (others[rival] - chi2.get(truth, math.inf)) if rival is not None else math.inf
+    return {"own_chi2": chi2.get(truth, math.inf), "rival": rival,
             "rival_chi2": others.get(rival, math.inf), "rival_gap": gap,
             "distinguishable": bool(gap >= settings.ambiguity_bic)}
 

@@ -35,8 +35,8 @@ def _kind(row):
         return "hidden"
     if row["named"] == row["truth"]:
         return "right"
-    distinguishable = row.get("distinguishable", True)
-    return "mimicked" if distinguishable is False or distinguishable == 0 else "wrong"
+    # False (or numpy's False) only: a row without the rival fits (NaN) counts as wrong
+    return "mimicked" if row.get("distinguishable", True) == 0 else "wrong"
 
 
 def plot_detectability(rows, *paths):
