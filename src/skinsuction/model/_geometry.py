@@ -61,6 +61,13 @@ class MeshSettings:
         Radius of the rounded edge between the probe's wall and its glued face, as
         a fraction of ``a`` (0: a sharp edge). The skin is glued from ``a (1 +
         edge_radius)`` outwards and slides on the rounded edge inside that radius.
+    engine : {"auto", "fast", "felupe"}
+        Who assembles the residual and the tangent: this model's own NumPy
+        assembly (``"fast"``, see :mod:`skinsuction.model._fast`) or FElupe's
+        general one (``"felupe"``, the reference). Both give the same residual
+        and tangent to round-off. The fast path covers the displacement
+        formulation with a sharp probe edge; ``"auto"`` takes it there and
+        FElupe's for ``formulation="mixed"`` or ``edge_radius > 0``.
     """
 
     refinement: float = 1.0
@@ -77,6 +84,7 @@ class MeshSettings:
     probe_wall: bool = True
     wall_penalty: float = 10.0
     edge_radius: float = 0.0
+    engine: str = "auto"
 
     @classmethod
     def from_dict(cls, settings=None):

@@ -7,6 +7,7 @@ import numpy as np
 from scipy.sparse.linalg import splu
 
 from ._curve import Curve, ParameterError
+from ._fast import FastAssembly, surface_edges
 from ._geometry import MeshSettings, suction_mesh
 from ._material import SkinLayers, bulk_modulus, thickness_stretch
 from ._probe import ProbeEdge
@@ -137,6 +138,17 @@ class SuctionTest:
                 raise ParameterError(f"{name} must be non-negative, not {value!r}")
         if not isinstance(mesh, MeshSettings):
             mesh = MeshSettings.from_dict(mesh)
+        if mesh.engine not in ("auto", "fast", "felupe"):
+            raise ParameterError(
+                f"engine must be 'auto', 'fast' or 'felupe', not {mesh.engine!r}"
+            )
+        fast_applies = mesh.formulation == "displacement" and mesh.edge_radius == 0
+        if mesh.engine == "fast" and not fast_applies:
+            raise ParameterError(
+                "the fast engine assembles the displacement formulation with a sharp "
+                "probe edge only: use engine 'felupe' for formulation 'mixed' or "
+                "edge_radius > 0"
+            )
 
         self.settings = mesh
         self.parameters = dict(
@@ -236,7 +248,25 @@ class SuctionTest:
         self.ext0 = fem.dof.apply(self.field, boundaries, self.dof0)
         self.apex = int(np.flatnonzero(np.isclose(z, 0, atol=tol) & np.isclose(r, 0, atol=tol))[0])
         self.dofs = self.field[0].values.size
-        self._factorize = TangentFactorizer(self.dof1)
+        self.engine = mesh.engine
+        if self.engine == "auto":
+            self.engine = "fast" if fast_applies else "felupe"
+        self._pressure = 0.0  # FElupe's sign: suction is negative
+        self._wall = self.items[2] if mesh.probe_wall else None
+        if self.engine == "fast":
+            self.fast = FastAssembly(
+                region, umat.x1, umat.x2, umat.bulk,
+                None if F0 is None else np.asarray(F0),
+                surface_edges(self.mesh.cells, self.mesh.points, inside),
+                [] if self._wall is None else self._wall.points, a_glued,
+                self.dof1, self.mesh.npoints,
+                wall_center=None if self._wall is None else self._wall.centerpoint,
+            )
+            # the wall's penalty follows FElupe's: re-evaluated from the solid's
+            # last tangent at the first evaluation of each increment
+            self._wall_stale = True
+        else:
+            self._factorize = TangentFactorizer(self.dof1)
 
     def apex_deflection(self):
         """Current apex deflection (mm, positive into the probe)."""
@@ -265,11 +295,35 @@ class SuctionTest:
             )
         return note
 
+    def _set_pressure(self, pressure_mbar):
+        # suction is a negative pressure: FElupe's positive pressure pushes inwards
+        self._pressure = -pressure_mbar * MBAR_TO_MPA
+        if self.engine == "felupe":
+            self.suction.update(self._pressure)
+
     def _residual(self):
-        return fem.tools.fun(self.items, self.field)
+        if self.engine == "felupe":
+            return fem.tools.fun(self.items, self.field)
+        u = self.field[0].values
+        if self._wall is not None and self._wall_stale:
+            if self.fast.solid_diagonal is None:
+                self.fast.tangent(u, self._pressure)  # the solid's stiffness, once
+            self.fast.update_wall_multiplier(self.settings.wall_penalty)
+            self._wall_stale = False
+        return self.fast.residual(u, self._pressure)
 
     def _tangent(self):
-        return self._factorize(fem.tools.jac(self.items, self.field))
+        if self.engine == "felupe":
+            return self._factorize(fem.tools.jac(self.items, self.field))
+        return self.fast.factorize(self.fast.tangent(self.field[0].values, self._pressure))
+
+    def _commit(self):
+        """Accept the current state as the increment's equilibrium."""
+        if self.engine == "felupe":
+            for item in self.items:
+                item.results.update_statevars()
+        else:
+            self._wall_stale = True
 
     def _equilibrium(self, pressure_mbar, lu, tol, maxiter, xtol=1e-9, f=None,
                      stall_after=16, stall_window=4):
@@ -283,8 +337,7 @@ class SuctionTest:
         ``f`` is the residual of the current state at this pressure, if known.
         Returns the tangent in use and the number of iterations.
         """
-        # suction is a negative pressure: FElupe's positive pressure pushes inwards
-        self.suction.update(-pressure_mbar * MBAR_TO_MPA)
+        self._set_pressure(pressure_mbar)
         u = self.field[0].values.reshape(-1)
         if f is None:
             f = self._residual()
@@ -396,7 +449,7 @@ class SuctionTest:
                 # inverts an element (then Newton starts from the last equilibrium)
                 scale = step / dp_last if dp_last > 0 else 0.0
                 u[:] = u_now + scale * (u_now - u_before)
-                self.suction.update(-p_next * MBAR_TO_MPA)
+                self._set_pressure(p_next)
                 with np.errstate(all="ignore"):
                     f = self._residual()
                 if not np.all(np.isfinite(f)):
@@ -416,8 +469,7 @@ class SuctionTest:
                         )
                         break
                     continue
-                for item in self.items:
-                    item.results.update_statevars()
+                self._commit()
                 u_before, u_now = u_now, u.copy()
                 p_now, dp_last = p_next, step
                 # an increment cut short by an output pressure says nothing of the
@@ -445,7 +497,7 @@ class SuctionTest:
             newton_iterations=iterations,
             dofs=self.dofs,
             seconds=time.perf_counter() - start,
-            info=dict(self.parameters, mesh=self.settings.to_dict()),
+            info=dict(self.parameters, mesh=self.settings.to_dict(), engine=self.engine),
         )
 
 
@@ -463,6 +515,7 @@ def simulate(
     prestretch=1.0,
     iteration_budget=None,
     progress=None,
+    engine=None,
 ):
     """Apex deflection M(p) of a two-layer skin model under a suction probe.
 
@@ -492,6 +545,10 @@ def simulate(
         Newton iterations before the solver gives up (default 20 per pressure).
     progress : callable, optional
         Called as ``progress(k, n, pressure_mbar)`` after each pressure reached.
+    engine : {"auto", "fast", "felupe"}, optional
+        Overrides the mesh settings' ``engine``: the model's own assembly
+        (``"auto"``, the default, takes it wherever it applies) or FElupe's, the
+        reference. ``Curve.info["engine"]`` says which ran.
 
     Returns
     -------
@@ -505,6 +562,9 @@ def simulate(
     >>> curve.converged, bool(0.02 < curve.deflection_mm[-1] < 0.04)
     (True, True)
     """
+    if engine is not None:
+        settings = mesh.to_dict() if isinstance(mesh, MeshSettings) else dict(mesh or {})
+        mesh = {**settings, "engine": engine}
     model = SuctionTest(
         x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom, mesh, prestretch=prestretch
     )
