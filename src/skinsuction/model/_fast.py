@@ -26,6 +26,7 @@ checks that both give the same residual and tangent to 1e-10.
 from __future__ import annotations
 
 import numpy as np
+import qdldl
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
@@ -105,7 +106,7 @@ class FastAssembly:
     """
 
     def __init__(self, region, x1, x2, bulk, prestretch, suction_edges, wall_points,
-                 wall_radius, free, npoints, wall_center=None):
+                 wall_radius, free, npoints, wall_center=None, solver="qdldl"):
         mesh = region.mesh
         self.points = np.asarray(mesh.points, dtype=float)
         self.cells = np.asarray(mesh.cells)
@@ -156,6 +157,11 @@ class FastAssembly:
         self.free = np.asarray(free)
         self._pattern()
         self.solid_diagonal = None
+        if solver not in ("qdldl", "superlu"):
+            raise ValueError(f"solver must be 'qdldl' or 'superlu', not {solver!r}")
+        self.solver = solver
+        self._qdldl, self._upper_slots = None, None
+        self.superlu_fallbacks = 0
 
     # ---------------------------------------------------------------- sparsity
     def _pattern(self):
@@ -262,9 +268,37 @@ class FastAssembly:
         return sp.csc_matrix((data, self.indices, self.indptr), shape=(self.free.size,) * 2)
 
     def factorize(self, data):
-        """SuperLU factors of the tangent, solving in the model's DOF order."""
+        """Factors of the tangent, solving in the model's free-DOF order.
+
+        QDLDL's LDL^T of the upper triangle, with the symbolic factorisation
+        of the first call kept (the tangent is symmetric: the follower pressure's
+        stiffness is, once assembled over free DOFs, since the loaded surface
+        ends at the axis and at the glued face); SuperLU's LU where QDLDL meets
+        a zero pivot or ``solver="superlu"``.
+        """
+        if self.solver == "qdldl":
+            upper = self._upper(data)
+            try:
+                if self._qdldl is None:
+                    self._qdldl = qdldl.Solver(upper, upper=True)
+                else:
+                    self._qdldl.update(upper, upper=True)
+                return _Factors(self._qdldl, self.order)
+            except ValueError:
+                self._qdldl = None  # a zero pivot: rebuilt from the next tangent
+                self.superlu_fallbacks += 1
         lu = splu(self.matrix(data), permc_spec="NATURAL", options=_SUPERLU_OPTIONS)
         return _Factors(lu, self.order)
+
+    def _upper(self, data):
+        if self._upper_slots is None:
+            A = self.matrix(np.arange(1, self.nnz + 1, dtype=float))
+            U = sp.triu(A, format="csc")
+            U.sort_indices()
+            self._upper_slots = U.data.astype(int) - 1
+            self._upper_indices, self._upper_indptr = U.indices, U.indptr
+        return sp.csc_matrix((data[self._upper_slots], self._upper_indices, self._upper_indptr),
+                             shape=(self.free.size,) * 2)
 
     # ----------------------------------------------------------------- suction
     def _suction(self, u, pressure, tangent):
@@ -322,7 +356,7 @@ class FastAssembly:
 
 
 class _Factors:
-    """SuperLU factors of the tangent in the kept order, solving in DOF order."""
+    """Factors of the tangent in the kept order, solving in DOF order."""
 
     def __init__(self, lu, order):
         self.lu, self.order = lu, order
