@@ -23,6 +23,7 @@ element and where the splice moved.
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import os
 import shutil
@@ -74,7 +75,9 @@ def child():
     for rid in job["rays"]:
         calls.clear()
         start = time.process_time()
-        _, frame, info = compute_ray(rid, job["pressures"], mesh, fallback, job["onset"])
+        # before the onset was folded into the ray's one solve, it was a separate solve
+        extra = (job["onset"],) if "onset_mbar" in inspect.signature(compute_ray).parameters else ()
+        _, frame, info = compute_ray(rid, job["pressures"], mesh, fallback, *extra)
         cpu = time.process_time() - start
         print(TAG + json.dumps({
             "ray_id": rid, "cpu_s": cpu, "newton_kept": info["newton_iterations"],

@@ -254,7 +254,7 @@ TINY_SCALE_FREE = {
     "scale_free_space": {
         "probes_mm": [6],
         "ratio": [0.001, 0.01, 0.1],
-        "load": {"max": 200, "steps": 5, "refine": 2},  # + loads 10, 20 (the onset solve)
+        "load": {"max": 200, "steps": 5, "refine": 2},  # + loads 10, 20 (the onset)
         "x1d_mpa": {"min": 0.1, "max": 10.0},
         "x1d_ref": 0.5,  # X1h = 0.05 MPa at the last ratio: the stand-in stops at 20 mbar
         "causes": {"strain_stiffening": {"keyword": "x2d", "symbol": "X2d", "unit": "MPa",

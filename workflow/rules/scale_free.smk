@@ -7,6 +7,13 @@ config.scale_free_space -> FE ray bundles, one job per (model, probe, X1h/X1d)
   -> one space per model: neo_hookean + one per cause
   (results/simulated_space/scale_free/<model>.parquet)
   -> coverage frontier (results/tables/scale_free_coverage.csv, figure)
+  -> check against the default space shipped with the package, ray by ray
+  (results/tables/shipped_space_check.csv; default target)
+
+Developer rule, not in any target: `snakemake --cores 2 ship_scale_free_space`
+copies the built model files into src/skinsuction/data/scale_free/ with
+PROVENANCE.json (what identify, diagnose and study read when no build is in the
+working directory).
 
 A ray is one FE curve at X1d = x1d_ref loaded to p/X1d = load.max; the scaling
 law M(s X1d, s X1h, s X2d, s p) = M(X1d, X1h, X2d, p) makes it cover every X1d
@@ -17,6 +24,9 @@ the neo-Hookean rays: the same jobs.
 from skinsuction.space import (  # noqa: E402
     BASELINE,
     BUNDLE_ID_PATTERN,
+    PROVENANCE_FILE,
+    SHIPPED_ATOL_MM,
+    SHIPPED_RTOL,
     RaySpec,
     bundle_id,
     ray_bundles,
@@ -58,9 +68,54 @@ SCALE_FREE_OUTPUTS = [
     "results/figures/scale_free_coverage.pdf",
 ]
 
+# the default space shipped with the package (the sources next to the workflow)
+SF_SHIPPED = SRC / "skinsuction" / "data" / "scale_free"
+#: in the default target (Snakefile): the check says itself whether it applies
+SHIPPED_CHECK_OUTPUTS = ["results/tables/shipped_space_check.csv"]
+
+
+def shipped_space_files(wildcards=None):
+    """The shipped space's files (model files and PROVENANCE.json), as far as they exist."""
+    if not SF_SHIPPED.is_dir():
+        return []
+    return sorted(
+        str(p)
+        for p in SF_SHIPPED.iterdir()
+        if p.suffix == ".parquet" or p.name == PROVENANCE_FILE
+    )
+
+
+def _config_file_of_space():
+    """Which config/*.yaml alone gives this scale-free space (None: a custom one)."""
+    import yaml
+
+    for path in sorted((Path(workflow.basedir) / "config").glob("*.yaml")):
+        try:
+            cfg = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+            sec = cfg.get("scale_free_space")
+            if sec is None:
+                continue
+            spec = RaySpec.from_config(sec, cfg.get("mesh"), cfg.get("mesh_fallback"))
+            same = registry_from_config(sec["causes"]) == SF_CAUSES
+        except Exception:  # not a config of this workflow: not a match
+            continue
+        if spec == SF_SPEC and same:
+            return f"config/{path.name}"
+    return None
+
+
+def _build_command(config_file):
+    if config_file == "config/config.yaml":
+        return "snakemake --cores 2 scale_free_space"
+    if config_file:
+        return (f"snakemake --cores 2 --configfile {config_file} "
+                "--replace-workflow-config scale_free_space")
+    return None
+
 
 localrules:
     scale_free_space,
+    ship_scale_free_space,
 
 
 rule scale_free_space:
@@ -80,7 +135,6 @@ rule simulate_ray_bundle:
         # a change of any of these reruns the FE jobs (Snakemake's params trigger)
         rays=lambda w: SF_BUNDLES[w.bundle],
         pressures=list(SF_SPEC.pressures_mbar),
-        onset=list(SF_SPEC.onset_mbar),
         mesh=SF_SPEC.mesh,
         fallback=[dict(f) for f in SF_SPEC.fallback],
         # the model, the fallback chain, the curve format and the ray ids
@@ -114,3 +168,59 @@ rule assemble_scale_free_space:
         "../envs/skinsuction.yaml"
     script:
         "../scripts/assemble_scale_free_space.py"
+
+
+rule check_shipped_space:
+    """The fresh build against the default space shipped with the package, ray by ray.
+
+    Applies when the configuration's scale-free space is the one the shipped space
+    was built from (its ray specification and causes, recorded in PROVENANCE.json);
+    otherwise the table says why it does not apply. Fails, naming the rays, if any
+    ray differs beyond the tolerance (relative 1e-9 + 1e-12 mm) or in its NaN pattern.
+    """
+    input:
+        spaces=SF_SPACES,
+        shipped=shipped_space_files,
+    output:
+        table="results/tables/shipped_space_check.csv",
+    log:
+        "logs/scale_free/check_shipped_space.log",
+    params:
+        spec=SF_SPEC.to_dict(),
+        causes=SF["causes"],
+        shipped_dir=str(SF_SHIPPED),
+        rtol=SHIPPED_RTOL,
+        atol=SHIPPED_ATOL_MM,
+        code=code_hash("space/_shipped.py", "space/_rays.py", "space/_causes.py"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/check_shipped_space.py"
+
+
+rule ship_scale_free_space:
+    """Developer rule (no target asks for it): ship the built space with the package.
+
+    Copies results/simulated_space/scale_free/<model>.parquet (not the ray bundles)
+    into src/skinsuction/data/scale_free/ and writes PROVENANCE.json there. It has no
+    output file, so it runs whenever it is asked for, and no rule depends on it.
+    """
+    input:
+        spaces=SF_SPACES,
+    log:
+        "logs/scale_free/ship_scale_free_space.log",
+    params:
+        dest=str(SF_SHIPPED),
+        repo=str(Path(workflow.basedir)),
+        config_file=lambda w: _config_file_of_space(),
+        build_command=lambda w: _build_command(_config_file_of_space()),
+        ship_command=" ".join(["snakemake", *sys.argv[1:]]),
+    threads: 1
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/ship_scale_free_space.py"

@@ -17,7 +17,6 @@ with log_to_file(snakemake.log[0]):
         pressures_mbar=snakemake.params.pressures,
         mesh=dict(snakemake.params.mesh),
         fallback=[dict(f) for f in snakemake.params.fallback],
-        onset_mbar=list(snakemake.params.onset),
         metadata={"bundle_id": snakemake.wildcards.bundle,
                   "source_hash": {"model": snakemake.params.code}},
     )

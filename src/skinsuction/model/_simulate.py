@@ -427,7 +427,9 @@ class SuctionTest:
         u_now, u_before = u.copy(), u.copy()
         p_now, dp_last = 0.0, 0.0
         iterations, reason, lu = 0, "", None
-        nominal = p_out[1] - p_out[0] if len(p_out) > 1 else 0.0
+        # increments grow to the widest spacing of the outputs (a curve refined
+        # near 0 would otherwise creep on at its first, smallest step)
+        nominal = float(np.max(np.diff(p_out))) if len(p_out) > 1 else 0.0
         if iteration_budget is None:
             iteration_budget = 20 * len(p_out)
         dp = nominal

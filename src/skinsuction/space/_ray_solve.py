@@ -1,7 +1,7 @@
 """FE runs of the scale-free space: one ray per (probe, X1h/X1d, cause value), in bundles.
 
-A ray is one FE curve at ``X1d = x1d_ref`` loaded to ``q = load_max`` (with an
-onset pre-load where the cause needs one); the workflow's jobs write a bundle
+A ray is one FE curve at ``X1d = x1d_ref`` loaded to ``q = load_max`` (its
+first step refined near 0); the workflow's jobs write a bundle
 of rays per (model, probe, ratio) (:func:`compute_bundle`), and
 :func:`build_ray_spaces` does the same without the workflow (notebooks, tests).
 """
@@ -19,7 +19,7 @@ from skinsuction._progress import Progress
 from ._causes import BASELINE
 from ._rays import EXTRA_KEYWORDS, RaySpec, assemble_ray_space, parse_ray_id, ray_bundles
 from ._solve import solve_with_fallbacks
-from ._storage import AXES, _write_parquet, curve_frame, round_sig
+from ._storage import AXES, _write_parquet, curve_frame
 
 log = logging.getLogger(__name__)
 
@@ -27,53 +27,20 @@ __all__ = ["compute_ray", "compute_bundle", "build_ray_spaces"]
 
 
 # ---------------------------------------------------------------------- FE rays
-def _with_onset(curve, params, pressures, onset, mesh, label):
-    """The curve at every pressure: the main solve's, plus the onset solve's at ``onset``."""
-    import dataclasses
-
-    from skinsuction.model import simulate
-
-    main_p = np.asarray(curve.pressure_mbar, dtype=float)
-    first = main_p[main_p > 0][0]
-    run_p = np.concatenate([[0.0], onset, [first]])
-    spent = 0.0
-    try:
-        short = simulate(**params, pressures_mbar=run_p, mesh=dict(mesh or {}))
-        m_on = np.asarray(short.deflection_mm, dtype=float)[1:-1].copy()
-        if not short.converged:
-            m_on[~(run_p[1:-1] <= short.last_converged_mbar)] = np.nan
-        spent = float(short.seconds or 0.0)
-        log.info("%s: onset solve at %s mbar, converged=%s", label, list(onset), short.converged)
-    except Exception:  # recorded as NaN nodes, never raised
-        log.exception("%s: onset solve raised", label)
-        m_on = np.full(len(onset), np.nan)
-    m = np.full(len(pressures), np.nan)
-    idx = {round_sig(x): i for i, x in enumerate(pressures)}
-    for x, v in zip(main_p, np.asarray(curve.deflection_mm, dtype=float)):
-        m[idx[round_sig(x)]] = v
-    for x, v in zip(onset, m_on):
-        m[idx[round_sig(x)]] = v
-    return dataclasses.replace(curve, pressure_mbar=np.asarray(pressures, dtype=float),
-                               deflection_mm=m, seconds=float(curve.seconds or 0.0) + spent)
-
-
-def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=None,
-                onset_mbar=()):
+def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=None):
     """Run the FE model (and its fallbacks) for the ray ``rid``: (Curve, frame, info).
 
-    ``onset_mbar``: pressures among ``pressures_mbar`` run by a separate short
-    solve from 0 (see :attr:`RaySpec.load_refine`); the main solve runs the others.
+    One solve runs every pressure, the onset loads near 0 included (see
+    :attr:`RaySpec.load_refine`): the solver's increments grow to the largest
+    spacing of the pressures, so the onset's small first steps cost a few
+    increments, not a solve of their own.
     """
     params = parse_ray_id(rid)
     extras = {k: params[k] for k in EXTRA_KEYWORDS if params[k] != EXTRA_KEYWORDS[k]}
     axes = {k: params[k] for k in AXES}
     pressures = np.asarray(pressures_mbar, dtype=float)
-    onset = np.asarray(sorted(onset_mbar), dtype=float)
-    main = pressures[~np.isin(pressures, onset)]
-    curve, kept, first_reason = solve_with_fallbacks({**axes, **extras}, main, mesh,
+    curve, kept, first_reason = solve_with_fallbacks({**axes, **extras}, pressures, mesh,
                                                      fallback, label=f"ray {rid}", splice=True)
-    if onset.size:
-        curve = _with_onset(curve, {**axes, **extras}, pressures, onset, mesh, f"ray {rid}")
     frame = curve_frame(curve, axes)
     for k in EXTRA_KEYWORDS:
         frame[k] = float(params[k])
@@ -88,7 +55,7 @@ def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=Non
 
 
 def compute_bundle(ray_ids, path, pressures_mbar, mesh: dict | None = None, fallback=None,
-                   metadata=None, onset_mbar=()) -> dict:
+                   metadata=None) -> dict:
     """Run the rays of one bundle and write them to one file (atomic Parquet).
 
     The adapter of the workflow's ``simulate_ray_bundle`` rule.  A ray that stops
@@ -99,7 +66,7 @@ def compute_bundle(ray_ids, path, pressures_mbar, mesh: dict | None = None, fall
 
     frames, infos = [], {}
     for rid in ray_ids:
-        _, frame, info = compute_ray(rid, pressures_mbar, mesh, fallback, onset_mbar)
+        _, frame, info = compute_ray(rid, pressures_mbar, mesh, fallback)
         frames.append(frame)
         infos[rid] = info
     meta = {"rays": infos, "mesh": mesh, "mesh_fallback": fallback, "provenance": collect(),
@@ -128,7 +95,7 @@ def build_ray_spaces(spec: RaySpec, causes: dict, out_dir=None, workers: int = 1
     (out / "rays").mkdir(parents=True, exist_ok=True)
     bundles = ray_bundles(spec, causes)
     jobs = [(ids, str(out / "rays" / f"{bid}.parquet"), spec.pressures_mbar, spec.mesh,
-             list(spec.fallback), spec.onset_mbar)
+             list(spec.fallback))
             for bid, ids in bundles.items() if not (out / "rays" / f"{bid}.parquet").exists()]
     # minutes to hours: a bar on a terminal, a line every 10 s in a log
     bar = Progress(len(jobs), "rays", "bundles", stream=progress, quiet_below=2.0)
@@ -152,6 +119,6 @@ def build_ray_spaces(spec: RaySpec, causes: dict, out_dir=None, workers: int = 1
 
 
 def _compute_bundle_job(job):
-    ids, path, pressures, mesh, fallback, onset = job
-    compute_bundle(ids, path, pressures, mesh, fallback, onset_mbar=onset)
+    ids, path, pressures, mesh, fallback = job
+    compute_bundle(ids, path, pressures, mesh, fallback)
     return path

@@ -147,7 +147,7 @@ class RaySpec:
         Extra load nodes near 0: the first step halved ``load_refine`` times
         (``load_max / load_steps / 2**k``).  A strongly stiffening dermis bends M(p)
         within the first even step (X2d/X1d = 1000: 4.8 % interpolation error with
-        none, 0.08 % with 4).  They are run as a separate short solve (the onset),
+        none, 0.08 % with 4).  They are solved in the ray's one run (the onset),
         as the main solve's modified Newton converges slowly after tiny steps.
     x1d_range : (float, float)
         Search window of X1d (MPa) of the fits; its lower end is raised to
@@ -211,13 +211,13 @@ class RaySpec:
 
     @property
     def onset_loads(self) -> np.ndarray:
-        """The extra loads near 0 (ascending), run as the onset solve."""
+        """The extra loads near 0 (ascending): the onset."""
         first = self.load_max / self.load_steps
         return first * 2.0 ** -np.arange(self.load_refine, 0, -1)
 
     @property
     def onset_mbar(self) -> tuple:
-        """Pressures of the onset solve's extra nodes (at ``x1d_ref``), mbar."""
+        """Pressures of the onset's extra nodes (at ``x1d_ref``), mbar."""
         return tuple(round_sig(float(q) * self.x1d_ref) for q in self.onset_loads)
 
     @property
