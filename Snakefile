@@ -7,6 +7,7 @@
 #
 # config -> FE curves (one job per grid point) -> simulated spaces -> figures
 #        -> FE ray bundles -> the scale-free space (identify/diagnose default) + coverage
+#           + its check against the default space shipped with the package
 #        -> identifications (Figures 4, 4b, 7, 8, timing and optimiser tables)
 #        -> diagnoses of measured files on the scale-free space (reports, Figures 5, 6)
 #        -> whole studies: every curve identified with intervals and diagnosed
@@ -51,6 +52,7 @@ rule all:
     input:
         final_outputs(),
         SCALE_FREE_OUTPUTS if "scale_free_space" in config else [],
+        SHIPPED_CHECK_OUTPUTS if "scale_free_space" in config else [],
         IDENTIFICATION_OUTPUTS if "identification" in config else [],
         DIAGNOSIS_OUTPUTS if "diagnosis" in config else [],
         STUDY_OUTPUTS if "studies" in config else [],

@@ -4,7 +4,7 @@
 ::
 
     skinsuction simulate --probe 6 --x1d 0.08 --x1h 4.1e-4 [--out curve.csv]
-    skinsuction identify MEASURED.csv [--space results/simulated_space/scale_free] \\
+    skinsuction identify MEASURED.csv [--space PATH] \\
         --objective single|weighted|ratio [--probe 6] [--alpha 0.5] [--repeats 100] \\
         [--seed 0] --out DIR
     skinsuction diagnose MEASURED.csv --out DIR
@@ -191,11 +191,14 @@ def _identify_arguments(p: argparse.ArgumentParser) -> None:
                    help="measured curves: CSV with columns probe_mm (mm), pressure_mbar "
                         "(suction, positive, mbar), deflection_mm (apex deflection, mm) and "
                         "optionally curve (replicate id); '#' lines are comments")
-    p.add_argument("--space", default="results/simulated_space/scale_free", metavar="PATH",
-                   help="simulated space built by the workflow: the scale-free space "
-                        "(default results/simulated_space/scale_free; every X1d and any "
-                        "pressure protocol within its reach) or a grid database such as "
-                        "results/simulated_space/paper.parquet (the paper's 11 x 11 grid)")
+    p.add_argument("--space", default=None, metavar="PATH",
+                   help="simulated space: a scale-free space (every X1d and any pressure "
+                        "protocol within its reach) or a grid database such as "
+                        "results/simulated_space/paper.parquet (the paper's 11 x 11 grid). "
+                        "Default: results/simulated_space/scale_free if the workflow has "
+                        "built it under the working directory, else the default scale-free "
+                        "space shipped with skinsuction; the space used is printed and "
+                        "recorded in identification.json (space.source, space.description)")
     p.add_argument("--objective", choices=("single", "weighted", "ratio"), required=True,
                    help="single: one probe (paper eq. 4); weighted: 2 and 6 mm curves, "
                         "alpha on 2 mm (eq. 10); ratio: 6 mm / 2 mm deflections (eqs. 11-12)")
@@ -251,6 +254,7 @@ def _run_identify(args: argparse.Namespace) -> int:
               f"X1d {interval_text(iv['X1d'])} MPa, X1h {interval_text(iv['X1h'])} MPa")
     for w in result["warnings"]:
         print(f"warning: {w}", file=sys.stderr)
+    print(f"space: {result['space'].get('description') or result['space'].get('path')}")
     print(f"wrote {paths['json']}, {paths['png']}, {paths['pdf']}")
     return EXIT_OK
 
@@ -277,9 +281,12 @@ def _study_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder: curves.parquet, comparison.csv, summary.md, "
                         "study.json and figures")
-    p.add_argument("--space", default="results/simulated_space/scale_free", metavar="DIR",
-                   help="the scale-free simulated space (default "
-                        "results/simulated_space/scale_free)")
+    p.add_argument("--space", default=None, metavar="DIR",
+                   help="the scale-free simulated space. Default: "
+                        "results/simulated_space/scale_free if the workflow has built it "
+                        "under the working directory, else the default space shipped with "
+                        "skinsuction; the space used is printed and recorded in study.json "
+                        "and summary.md")
     p.add_argument("--no-diagnose", action="store_true",
                    help="identify only (much faster: no diagnosis of each curve)")
     p.add_argument("--repeats", type=positive_int, default=2,
@@ -304,6 +311,7 @@ def _run_study(args: argparse.Namespace) -> int:
                       workers=args.workers, reports=args.reports)
     except FileNotFoundError as err:
         raise CLIError(str(err)) from None
+    print(f"space: {r['space']}")
     print(f"{r['measurements']} measurements, {r['errors']} with an error, "
           f"{r['seconds']:.1f} s")
     for c in r["comparison"]:

@@ -141,3 +141,59 @@ def final_outputs():
         "results/figures/fig3_boundary_conditions.pdf",
         "results/tables/fig3_boundary_conditions.csv",
     ]
+
+
+# ------------------------------------- the default scale-free space shipped with the package
+#: its folder in the sources next to the workflow (skinsuction.space.SHIPPED_SPACE_DIR there)
+SF_SHIPPED = SRC / "skinsuction" / "data" / "scale_free"
+
+
+def shipped_space_files(wildcards=None):
+    """The shipped space's files (model files and PROVENANCE.json), as far as they exist."""
+    if not SF_SHIPPED.is_dir():
+        return []
+    return sorted(
+        str(p)
+        for p in SF_SHIPPED.iterdir()
+        if p.suffix == ".parquet" or p.name == "PROVENANCE.json"
+    )
+
+
+def config_file_of_space():
+    """Which config/*.yaml alone gives this run's scale-free space (None: a custom one).
+
+    Each file is validated as the workflow validates its config (the schema fills
+    the defaults), then its ray specification and causes are compared with this
+    run's (SF_SPEC, SF_CAUSES of scale_free.smk).
+    """
+    import yaml
+
+    from skinsuction.space import RaySpec, registry_from_config
+
+    schema = Path(workflow.basedir) / "workflow" / "schemas" / "config.schema.yaml"
+    for path in sorted((Path(workflow.basedir) / "config").glob("*.yaml")):
+        try:
+            cfg = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
+            validate(cfg, schema=str(schema))
+            sec = cfg.get("scale_free_space")
+            if sec is None:
+                continue
+            spec = RaySpec.from_config(sec, cfg.get("mesh"), cfg.get("mesh_fallback"))
+            same = registry_from_config(sec["causes"]) == SF_CAUSES
+        except Exception:  # not a config of this workflow: not a match
+            continue
+        if spec == SF_SPEC and same:
+            return f"config/{path.name}"
+    return None
+
+
+def build_command(config_file):
+    """The command that builds the scale-free space of ``config_file`` (None if unknown)."""
+    if config_file == "config/config.yaml":
+        return "snakemake --cores 2 scale_free_space"
+    if config_file:
+        return (
+            f"snakemake --cores 2 --configfile {config_file} "
+            "--replace-workflow-config scale_free_space"
+        )
+    return None

@@ -24,7 +24,6 @@ the neo-Hookean rays: the same jobs.
 from skinsuction.space import (  # noqa: E402
     BASELINE,
     BUNDLE_ID_PATTERN,
-    PROVENANCE_FILE,
     SHIPPED_ATOL_MM,
     SHIPPED_RTOL,
     RaySpec,
@@ -68,49 +67,8 @@ SCALE_FREE_OUTPUTS = [
     "results/figures/scale_free_coverage.pdf",
 ]
 
-# the default space shipped with the package (the sources next to the workflow)
-SF_SHIPPED = SRC / "skinsuction" / "data" / "scale_free"
 #: in the default target (Snakefile): the check says itself whether it applies
 SHIPPED_CHECK_OUTPUTS = ["results/tables/shipped_space_check.csv"]
-
-
-def shipped_space_files(wildcards=None):
-    """The shipped space's files (model files and PROVENANCE.json), as far as they exist."""
-    if not SF_SHIPPED.is_dir():
-        return []
-    return sorted(
-        str(p)
-        for p in SF_SHIPPED.iterdir()
-        if p.suffix == ".parquet" or p.name == PROVENANCE_FILE
-    )
-
-
-def _config_file_of_space():
-    """Which config/*.yaml alone gives this scale-free space (None: a custom one)."""
-    import yaml
-
-    for path in sorted((Path(workflow.basedir) / "config").glob("*.yaml")):
-        try:
-            cfg = yaml.safe_load(path.read_text(encoding="utf-8")) or {}
-            sec = cfg.get("scale_free_space")
-            if sec is None:
-                continue
-            spec = RaySpec.from_config(sec, cfg.get("mesh"), cfg.get("mesh_fallback"))
-            same = registry_from_config(sec["causes"]) == SF_CAUSES
-        except Exception:  # not a config of this workflow: not a match
-            continue
-        if spec == SF_SPEC and same:
-            return f"config/{path.name}"
-    return None
-
-
-def _build_command(config_file):
-    if config_file == "config/config.yaml":
-        return "snakemake --cores 2 scale_free_space"
-    if config_file:
-        return (f"snakemake --cores 2 --configfile {config_file} "
-                "--replace-workflow-config scale_free_space")
-    return None
 
 
 localrules:
@@ -216,8 +174,8 @@ rule ship_scale_free_space:
     params:
         dest=str(SF_SHIPPED),
         repo=str(Path(workflow.basedir)),
-        config_file=lambda w: _config_file_of_space(),
-        build_command=lambda w: _build_command(_config_file_of_space()),
+        config_file=lambda w: config_file_of_space(),
+        build_command=lambda w: build_command(config_file_of_space()),
         ship_command=" ".join(["snakemake", *sys.argv[1:]]),
     threads: 1
     conda:

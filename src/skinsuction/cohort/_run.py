@@ -272,12 +272,22 @@ def _md_table(rows, cols):
     return head + body
 
 
+def _space_text(meta, markdown: bool = True) -> str:
+    """The study's space, in words: its description, and its path unless given."""
+    desc = meta.get("space_description")
+    if not desc:
+        return str(meta["space"])
+    q = "`" if markdown else ""
+    return desc if meta.get("space_source") == "given" else f"{desc} ({q}{meta['space']}{q})"
+
+
 def _summary_md(df, id_cols, comparison, notes, meta) -> str:
     n, errors = len(df), df[df["error"].notna()]
     lines = [f"# Study {meta['name']}", "",
              f"{n} measurements from {meta['path']}: {n - len(errors)} identified, "
              f"{len(errors)} with an error. Identification with 95 % profile-likelihood "
-             f"intervals on {meta['space']}; diagnosis: {'yes' if meta['diagnose'] else 'no'}. "
+             f"intervals on {_space_text(meta)}; diagnosis: "
+             f"{'yes' if meta['diagnose'] else 'no'}. "
              f"{meta['seconds']:.1f} s on {meta['workers']} worker(s).", ""]
     if "group" in df.columns:
         lines += ["## X1d per group", "",
@@ -320,7 +330,7 @@ def _summary_md(df, id_cols, comparison, notes, meta) -> str:
     return "\n".join(lines)
 
 
-def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
+def run_study(path, out_dir, *, space_dir=None,
               diagnose: bool = True, repeats: int = 2, seed: int = 0, level: float = 0.95,
               workers: int = 1, reports: bool = False, name: str | None = None,
               diagnosis_settings: dict | None = None, figures: bool = True,
@@ -334,8 +344,12 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
     out_dir : path-like
         Output folder (``curves.parquet``, ``comparison.csv``, ``summary.md``,
         figures, ``study.json`` with the settings and versions).
-    space_dir : path-like
-        The scale-free simulated space.
+    space_dir : path-like, optional
+        The scale-free simulated space.  Default: the workflow's build in
+        ``results/simulated_space/scale_free`` of the working directory if there
+        is one, else the default space shipped with skinsuction
+        (:func:`skinsuction.space.resolve_space`); ``study.json`` (``space_source``,
+        ``space_description``) and ``summary.md`` say which.
     diagnose : bool
         Diagnose every measurement too (slower: seconds each).
     repeats, seed, level :
@@ -387,11 +401,16 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
     """
     from skinsuction import __version__
     from skinsuction._files import atomic_output
-    from skinsuction.space import load_space
+    from skinsuction.space import load_space, resolve_space
 
     t0 = time.perf_counter()
     if not Path(path).exists():
         raise FileNotFoundError(f"{path}: no such study folder or file")
+    if space is None or space_dir is not None or (diagnose and ray_spaces is None):
+        src = resolve_space(space_dir)
+        space_dir, space_info = src.path, src.info()
+    else:
+        space_info = {"source": "given", "description": "a space given in memory"}
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     space = space if space is not None else load_space(space_dir)
@@ -417,7 +436,10 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
     comparison, notes = compare_groups(df, seed=seed)
     seconds = time.perf_counter() - t0
     meta = {"name": name or Path(path).stem, "path": str(path), "space": str(space_dir),
-            "space_sha256": space.info.get("sha256"), "diagnose": bool(diagnose),
+            "space_sha256": space.info.get("sha256"),
+            "space_source": space_info["source"],
+            "space_description": space_info["description"],
+            "space_shipped": space_info.get("shipped"), "diagnose": bool(diagnose),
             "repeats": int(repeats), "seed": int(seed), "level": float(level),
             "workers": int(workers), "seconds": seconds, "version": __version__,
             "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
@@ -446,6 +468,7 @@ def run_study(path, out_dir, *, space_dir="results/simulated_space/scale_free",
         from skinsuction.figures.cohort import write_study_figures
 
         paths.update(write_study_figures(df, out))
-    return {"paths": {k: str(v) for k, v in paths.items()}, "measurements": int(len(df)),
+    return {"paths": {k: str(v) for k, v in paths.items()}, "space": _space_text(meta, markdown=False),
+            "measurements": int(len(df)),
             "errors": meta["errors"], "seconds": seconds, "comparison": comparison,
             "notes": notes}

@@ -33,7 +33,7 @@ spaces, :mod:`._stats` for the statistics and :mod:`._diagnose` for the rule.
 
 from skinsuction.space import BASELINE, DEFAULT_CAUSES, NONE, Cause, default_registry, registry_from_config
 from ._cli import add_arguments, command
-from ._diagnose import DEFAULT_SPACE_DIR, Settings, diagnose, diagnose_file, prepare_data
+from ._diagnose import Settings, diagnose, diagnose_file, prepare_data
 from ._fit import Fit, FitData, ModelCurves, fit_model
 from ._report import write_report
 from ._stats import bic, misfit_test, noise_from_differences, noise_from_replicates
@@ -49,7 +49,7 @@ from ._virtual import (
 __all__ = [
     "BASELINE", "NONE", "Cause", "DEFAULT_CAUSES", "default_registry", "registry_from_config",
     "add_arguments", "command",
-    "DEFAULT_SPACE_DIR", "Settings", "diagnose", "diagnose_file", "prepare_data",
+    "Settings", "diagnose", "diagnose_file", "prepare_data",
     "Fit", "FitData", "ModelCurves", "fit_model",
     "write_report",
     "bic", "misfit_test", "noise_from_differences", "noise_from_replicates",

@@ -2,7 +2,7 @@
 
 ::
 
-    skinsuction diagnose MEASURED.csv --out DIR [--space results/simulated_space/scale_free]
+    skinsuction diagnose MEASURED.csv --out DIR [--space DIR]
         [--noise-um SD] [--alpha 0.01] [--delta-bic -10] [--seed 0] [--repeats 2]
 
 Bad input (file, spaces) raises ``ValueError`` subclasses with one-line messages
@@ -18,7 +18,7 @@ import sys
 
 from skinsuction._argtypes import non_negative, non_negative_int, number, positive, positive_int
 
-from ._diagnose import DEFAULT_SPACE_DIR, Settings
+from ._diagnose import Settings
 
 __all__ = ["add_arguments", "command"]
 
@@ -47,11 +47,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder: report.json, report.md, fit.png/pdf, "
                         "residuals.png/pdf, gain.png/pdf")
-    p.add_argument("--space", "--space-dir", dest="space_dir", default=DEFAULT_SPACE_DIR,
+    p.add_argument("--space", "--space-dir", dest="space_dir", default=None,
                    metavar="DIR",
-                   help="folder of the scale-free simulated space built by the workflow "
-                        f"(neo_hookean.parquet and one file per cause; default {DEFAULT_SPACE_DIR}; "
-                        "build with `snakemake --cores 2 scale_free_space`)")
+                   help="folder of the scale-free simulated space (neo_hookean.parquet and one "
+                        "file per cause). Default: results/simulated_space/scale_free if the "
+                        "workflow has built it under the working directory (`snakemake "
+                        "--cores 2 scale_free_space`), else the default space shipped with "
+                        "skinsuction; the space used is printed and recorded in report.json "
+                        "(input.space) and report.md")
     p.add_argument("--noise-um", type=positive, default=None, metavar="UM",
                    help="noise sd of one measured deflection in µm, if known (default: "
                         "estimated from replicate curves, or from the curves' differences)")
@@ -94,6 +97,9 @@ def command(args: argparse.Namespace) -> int:
         paths = write_report(report, args.out)
     except OSError as err:
         raise InputError(f"{args.out}: cannot write ({err.strerror or err})") from None
+    space = (report.get("input") or {}).get("space") or {}
+    if space.get("description"):
+        print(f"space: {space['description']}")
     print(report["summary"])
     print(f"baseline: {report['baseline']['description']}")
     print(f"wrote {', '.join(str(p) for p in paths.values())}")

@@ -55,17 +55,13 @@ from ._stats import (
     noise_from_replicates,
 )
 
-__all__ = ["BeyondSpaceError", "BEYOND_SPACE", "Settings", "diagnose", "diagnose_file", "prepare_data", "DEFAULT_SPACE_DIR"]
+__all__ = ["BeyondSpaceError", "BEYOND_SPACE", "Settings", "diagnose", "diagnose_file", "prepare_data"]
 
 #: Cause and verdict where the best fit sits at an edge of the simulated space.
 BEYOND_SPACE = "beyond_space"
 
 #: Fewest points above 0 mbar per probe that a diagnosis accepts.
 MIN_POINTS = 8
-
-#: Where the workflow writes the ray spaces (``--space-dir`` default).
-DEFAULT_SPACE_DIR = "results/simulated_space/scale_free"
-
 
 @dataclass(frozen=True)
 class Settings:
@@ -539,14 +535,26 @@ def summary_text(report: dict) -> str:
     return s
 
 
-def diagnose_file(measured_path, space_dir=DEFAULT_SPACE_DIR, settings: Settings | None = None,
+def diagnose_file(measured_path, space_dir=None, settings: Settings | None = None,
                   spaces: dict | None = None) -> dict:
-    """Read a measured CSV (as ``skinsuction identify`` does) and diagnose it."""
+    """Read a measured CSV (as ``skinsuction identify`` does) and diagnose it.
+
+    ``space_dir``: the scale-free space; by default the workflow's build in
+    ``results/simulated_space/scale_free`` of the working directory if there is
+    one, else the default space shipped with skinsuction
+    (:func:`skinsuction.space.resolve_space`).  ``input.space`` of the report
+    says which.  ``spaces``: the ray spaces already read (from ``space_dir``).
+    """
     from skinsuction._files import file_sha256
     from skinsuction.measured import load_measured
 
-    from skinsuction.space import read_ray_spaces
+    from skinsuction.space import read_ray_spaces, resolve_space
 
+    if spaces is None or space_dir is not None:
+        src = resolve_space(space_dir)
+        space_dir, space_info = src.path, src.info()
+    else:
+        space_info = {"source": "given", "description": "ray spaces given in memory"}
     if spaces is None:
         spaces = read_ray_spaces(space_dir)
     base = spaces[BASELINE]
@@ -557,5 +565,6 @@ def diagnose_file(measured_path, space_dir=DEFAULT_SPACE_DIR, settings: Settings
                                      f"{sp.load_max:g} mbar/MPa up to X1d = "
                                      f"{sp.x1d_range[1]:g} MPa"))
     source = {"file": str(measured_path), "sha256": file_sha256(measured_path),
-              "space_dir": str(space_dir) if space_dir is not None else None}
+              "space_dir": str(space_dir) if space_dir is not None else None,
+              "space": space_info}
     return diagnose(data, spaces, settings, source=source)

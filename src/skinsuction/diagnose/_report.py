@@ -52,6 +52,16 @@ def _interval_rows(model: str, ci) -> list:
     return out
 
 
+def _space_lines(inp: dict) -> list:
+    """The simulated space of the diagnosis, as a list item (none if not recorded)."""
+    space = inp.get("space") or {}
+    if not space.get("description"):
+        return []
+    where = f" (`{inp['space_dir']}`)" if inp.get("space_dir") and space.get("source") != "given" \
+        else ""
+    return [f"- simulated space: {space['description']}{where}"]
+
+
 def report_markdown(report: dict, figures=None) -> str:
     """The report as Markdown."""
     b = report["baseline"]
@@ -70,6 +80,7 @@ def report_markdown(report: dict, figures=None) -> str:
         + (f", {report['noise']['dof']:.0f} degrees of freedom" if report["noise"].get("dof")
            else "") + f"); accuracy of the spaces {report['noise']['model_error_um']:g} µm "
         "added in quadrature",
+        *_space_lines(report["input"]),
         "",
         "## Neo-Hookean fit (baseline)",
         "",

@@ -38,7 +38,7 @@ import numpy as np
 
 from skinsuction._files import file_sha256
 from skinsuction.errors import InputError
-from skinsuction.space import DEFAULT_SPACE, LoadedSpace, load_space
+from skinsuction.space import LoadedSpace, load_space
 
 from ._bounds import bound_flags
 from ._intervals import profile_intervals
@@ -83,7 +83,7 @@ def _pick_curve(data, probe, curve_id, path):
 
 def identify_measured(
     measured_path,
-    space_path=DEFAULT_SPACE,
+    space_path=None,
     *,
     objective: str = "single",
     probe_mm: float = 6.0,
@@ -103,10 +103,13 @@ def identify_measured(
     ----------
     measured_path : path-like
         Measured CSV (format: :mod:`skinsuction.measured`).
-    space_path : path-like
-        The scale-free space (its directory, default
-        ``results/simulated_space/scale_free``, or its ``neo_hookean.parquet``),
-        or a grid database such as the paper's (``results/simulated_space/paper.parquet``).
+    space_path : path-like, optional
+        The scale-free space (its directory or its ``neo_hookean.parquet``), or a
+        grid database such as the paper's (``results/simulated_space/paper.parquet``).
+        Default: ``results/simulated_space/scale_free`` if the workflow has built it
+        under the working directory, else the default space shipped with skinsuction
+        (:func:`skinsuction.space.resolve_space`); ``space.source`` and
+        ``space.description`` of the result say which.
     objective : {"single", "weighted", "ratio"}
         ``single``: the curve of ``probe_mm`` alone (eq. 4); ``weighted``: the 2
         and 6 mm curves, ``alpha`` on 2 mm (eq. 10); ``ratio``: 6 mm / 2 mm

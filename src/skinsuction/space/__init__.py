@@ -16,7 +16,9 @@ Modules: ``_storage`` (point ids, curve files, Parquet with provenance),
 database), ``_interpolate`` (a grid of one probe, :class:`GriddedSpace`, and
 cubic Lagrange with its NaN policy), ``_causes`` (the cause coordinates of the
 scale-free space), ``_rays``, ``_ray_solve`` and ``_ray_interpolate`` (the
-scale-free layout), ``_open`` (either layout, per probe).
+scale-free layout), ``_open`` (either layout, per probe), ``_shipped`` (the
+default space: the workflow's build in the working directory, else the one
+shipped with the package; comparing and shipping builds).
 
 Examples
 --------
@@ -56,7 +58,7 @@ from ._interpolate import (
     evaluate,
     interpolate_pressure,
 )
-from ._open import DEFAULT_SPACE, LoadedSpace, ProbeSpace, load_space
+from ._open import LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
 from ._ray_solve import build_ray_spaces, compute_bundle, compute_ray
 from ._rays import (
@@ -76,6 +78,23 @@ from ._rays import (
     rays_of,
     read_ray_space,
     read_ray_spaces,
+)
+from ._shipped import (
+    PROVENANCE_FILE,
+    SHIPPED_ATOL_MM,
+    SHIPPED_RTOL,
+    SHIPPED_SPACE_DIR,
+    WORKFLOW_SPACE_DIR,
+    ShippedSpaceMismatch,
+    SpaceSource,
+    check_shipped_space,
+    compare_ray_spaces,
+    default_space_dir,
+    resolve_space,
+    ship_space,
+    shipped_check_applies,
+    shipped_provenance,
+    verify_shipped_files,
 )
 from ._solve import compute_point, solve_with_fallbacks
 from ._storage import (
@@ -99,7 +118,12 @@ from ._storage import (
 
 __all__ = [
     # the abstraction
-    "ProbeSpace", "LoadedSpace", "load_space", "DEFAULT_SPACE",
+    "ProbeSpace", "LoadedSpace", "load_space",
+    # the default space: the workflow's build here, else the one shipped with the package
+    "WORKFLOW_SPACE_DIR", "SHIPPED_SPACE_DIR", "PROVENANCE_FILE", "SpaceSource",
+    "default_space_dir", "resolve_space", "shipped_provenance", "verify_shipped_files",
+    "shipped_check_applies", "compare_ray_spaces", "check_shipped_space",
+    "ShippedSpaceMismatch", "ship_space", "SHIPPED_RTOL", "SHIPPED_ATOL_MM",
     # storage
     "AXES", "BOTTOMS", "COLUMNS", "DEFAULTS", "METADATA_KEY", "POINT_ID_PATTERN",
     "SIGNIFICANT_DIGITS", "SPEC_KEYS", "CorruptCurveError", "curve_frame", "parse_point_id",

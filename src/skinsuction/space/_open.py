@@ -21,8 +21,9 @@ from ._grid import read_space
 from ._interpolate import GriddedSpace
 from ._ray_interpolate import NeoHookeanSlice
 from ._rays import read_ray_space, read_ray_spaces
+from ._shipped import resolve_space
 
-__all__ = ["ProbeSpace", "LoadedSpace", "load_space", "DEFAULT_SPACE"]
+__all__ = ["ProbeSpace", "LoadedSpace", "load_space"]
 
 
 class ProbeSpace(Protocol):
@@ -56,10 +57,6 @@ class ProbeSpace(Protocol):
 
     def range_note(self) -> str:
         """What sets ``pressure_range``, for error messages."""
-
-
-#: Default simulated space of ``skinsuction identify``: the scale-free space.
-DEFAULT_SPACE = "results/simulated_space/scale_free"
 
 
 def _is_scale_free(path: Path) -> bool:
@@ -168,14 +165,18 @@ class LoadedSpace:
         return next((n for n in notes if "scale-free" in n), notes[0])
 
 
-def load_space(space_path=DEFAULT_SPACE, bottom: str = "fixed") -> LoadedSpace:
+def load_space(space_path=None, bottom: str = "fixed") -> LoadedSpace:
     """Read a simulated space once, whatever its layout.
 
     Parameters
     ----------
-    space_path : path-like
+    space_path : path-like, optional
         The scale-free space (its folder or its ``neo_hookean.parquet``) or a
         grid database (e.g. the paper's ``results/simulated_space/paper.parquet``).
+        Default: the workflow's build in ``results/simulated_space/scale_free``
+        of the working directory if there is one, else the default space
+        shipped with skinsuction (:func:`skinsuction.space.resolve_space`).
+        ``info`` says which (``source``, ``description``).
     bottom : str
         Bottom condition of the curves to use.
 
@@ -206,11 +207,13 @@ def load_space(space_path=DEFAULT_SPACE, bottom: str = "fixed") -> LoadedSpace:
     ...
     skinsuction.errors.InputError: ...missing.parquet: simulated space not found ...
     """
-    spaces, space_meta, p_range = _read_space(space_path, bottom)
-    sp = Path(space_path)
+    src = resolve_space(space_path)
+    spaces, space_meta, p_range = _read_space(src.path, bottom)
+    sp = src.path
     sha_of = sp if sp.is_file() else sp / "neo_hookean.parquet"
-    info = {"path": str(space_path), "sha256": file_sha256(sha_of),
+    info = {"path": str(sp), "sha256": file_sha256(sha_of),
             "name": space_meta.get("space"),
             "git_commit": (space_meta.get("git") or {}).get("commit"),
-            "mesh": space_meta.get("mesh") or (space_meta.get("ray_spec") or {}).get("mesh")}
+            "mesh": space_meta.get("mesh") or (space_meta.get("ray_spec") or {}).get("mesh"),
+            **src.info()}
     return LoadedSpace(spaces, info, p_range, bottom)
