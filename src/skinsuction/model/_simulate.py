@@ -389,6 +389,7 @@ class SuctionTest:
         min_increment_mbar=0.01,
         iteration_budget=None,
         progress=None,
+        stall_after=8,
     ):
         """Solve for each pressure, with an extrapolated predictor and cutback.
 
@@ -411,6 +412,10 @@ class SuctionTest:
         progress : callable, optional
             Called as ``progress(k, n, pressure_mbar)`` after the k-th of the n
             pressures after 0 is reached (e.g. :class:`skinsuction.Progress`'s bar).
+        stall_after : int
+            Newton iterations of an increment before one whose residual has not
+            halved in 4 is given up and cut back (8; more is slower but can carry
+            a soft corner further, see ``config.yaml``'s ``mesh_fallback``).
         """
         start = time.perf_counter()
         p_out = (
@@ -462,7 +467,8 @@ class SuctionTest:
                     u[:], f = u_now, None
                 try:
                     with np.errstate(all="ignore"):
-                        lu, used = self._equilibrium(p_next, lu, tol, maxiter, f=f)
+                        lu, used = self._equilibrium(p_next, lu, tol, maxiter, f=f,
+                                                     stall_after=stall_after)
                     iterations += used
                     if used > 2:
                         # a hard increment: its last tangent would mislead the next
@@ -525,6 +531,7 @@ def simulate(
     iteration_budget=None,
     progress=None,
     engine=None,
+    stall_after=8,
 ):
     """Apex deflection M(p) of a two-layer skin model under a suction probe.
 
@@ -554,6 +561,8 @@ def simulate(
         Newton iterations before the solver gives up (default 20 per pressure).
     progress : callable, optional
         Called as ``progress(k, n, pressure_mbar)`` after each pressure reached.
+    stall_after : int, optional
+        Newton iterations of an increment before a stalled one is cut back.
     engine : {"auto", "fast", "felupe"}, optional
         Overrides the mesh settings' ``engine``: the model's own assembly
         (``"auto"``, the default, takes it wherever it applies) or FElupe's, the
@@ -577,4 +586,5 @@ def simulate(
     model = SuctionTest(
         x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom, mesh, prestretch=prestretch
     )
-    return model.run(pressures_mbar, iteration_budget=iteration_budget, progress=progress)
+    return model.run(pressures_mbar, iteration_budget=iteration_budget, progress=progress,
+                     stall_after=stall_after)

@@ -71,11 +71,13 @@ def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None,
 
     pressures = np.asarray(pressures_mbar, dtype=float)
 
-    def solve(settings, budget=None):
+    def solve(settings, budget=None, stall_after=None):
         log.info("%s: %s, %d pressures, mesh %s", label, params, pressures.size, settings)
         start = time.perf_counter()
         try:
             extra = {} if budget is None else {"iteration_budget": budget}
+            if stall_after is not None:
+                extra["stall_after"] = stall_after
             curve = simulate(**params, pressures_mbar=pressures, mesh=settings, **extra)
         except ParameterError as err:
             # refused parameters or mesh settings are the configuration's error, not a
@@ -105,7 +107,8 @@ def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None,
             break
         settings = dict(settings)
         per_step = settings.pop("iterations_per_step", 20)
-        other = solve({**dict(mesh or {}), **settings}, per_step * pressures.size)
+        stall_after = settings.pop("stall_after", None)
+        other = solve({**dict(mesh or {}), **settings}, per_step * pressures.size, stall_after)
         spent += other.seconds
         if _reached(other) > _reached(curve):
             log.info("%s: kept the curve of fallback %d", label, k)
@@ -150,7 +153,8 @@ def compute_point(
     fallback : dict or list of dict, optional
         Mesh settings (``config["mesh_fallback"]``) that replace those of ``mesh``
         for another solve while the solves so far stopped early, in order, each
-        with ``iterations_per_step`` (its Newton budget per pressure, default 20).
+        with ``iterations_per_step`` (its Newton budget per pressure, default 20)
+        and optionally ``stall_after`` (see :meth:`skinsuction.model.SuctionTest.run`).
         The curve that reaches the highest pressure is kept; ``mesh_fallback`` in
         its rows says whether it is a fallback's, the metadata which one
         (``mesh_fallback_kept``, from 1) and the first solve's reason.
