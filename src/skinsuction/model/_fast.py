@@ -195,17 +195,15 @@ class FastAssembly:
         self.keep = np.flatnonzero(keep)
         self.slot = inverse
         self.nnz = unique.size
-        # the diagonal slots (radial DOFs of wall points, for the penalty)
-        self._diag = {}
+        self._keys = unique  # column-major keys of the data slots, sorted
 
-    def _slot_of_diagonal(self, dofs):
-        pos = self.position[dofs]
-        out = np.full(len(dofs), -1)
-        for k, p in enumerate(pos):
-            if p < 0:
-                continue
-            lo, hi = self.indptr[p], self.indptr[p + 1]
-            out[k] = lo + int(np.searchsorted(self.indices[lo:hi], p))
+    def _slots(self, row_dofs, col_dofs):
+        """Data slots of the entries (row DOF, column DOF); -1 where either is fixed."""
+        rows, cols = self.position[row_dofs], self.position[col_dofs]
+        free = (rows >= 0) & (cols >= 0)
+        out = np.full(rows.shape, -1)
+        out[free] = np.searchsorted(self._keys, cols[free].astype(np.int64) * self.free.size
+                                    + rows[free])
         return out
 
     # -------------------------------------------------------------- kinematics
@@ -324,17 +322,10 @@ class FastAssembly:
 
     def _edge_contribution(self, ke):
         if not hasattr(self, "_edge_slot"):
-            pos = self.position[self.edge_dofs]
-            rows = np.repeat(pos, 6, axis=1).ravel()
-            cols = np.tile(pos, 6).ravel()
-            ok = (rows >= 0) & (cols >= 0)
-            key = cols.astype(np.int64) * self.free.size + rows
-            slot = np.full(key.shape, -1)
-            for k in np.flatnonzero(ok):
-                c, rr = cols[k], rows[k]
-                lo, hi = self.indptr[c], self.indptr[c + 1]
-                slot[k] = lo + int(np.searchsorted(self.indices[lo:hi], rr))
-            self._edge_slot, self._edge_keep = slot[ok], np.flatnonzero(ok)
+            # an edge's couplings are its cell's: every one has a slot
+            slot = self._slots(np.repeat(self.edge_dofs, 6, axis=1).ravel(),
+                               np.tile(self.edge_dofs, 6).ravel())
+            self._edge_slot, self._edge_keep = slot[slot >= 0], np.flatnonzero(slot >= 0)
         return np.bincount(self._edge_slot, ke.ravel()[self._edge_keep], minlength=self.nnz)
 
     # -------------------------------------------------------------------- wall
@@ -344,7 +335,8 @@ class FastAssembly:
 
     def _wall_slots(self):
         if not hasattr(self, "_wall_slot"):
-            self._wall_slot = self._slot_of_diagonal(2 * self.wall_points + 1)
+            radial = 2 * self.wall_points + 1
+            self._wall_slot = self._slots(radial, radial)
         return self._wall_slot
 
     def update_wall_multiplier(self, penalty):
