@@ -7,7 +7,7 @@ import numpy as np
 from scipy.sparse.linalg import splu
 
 from ._curve import Curve, ParameterError
-from ._fast import FastAssembly, surface_edges
+from ._fast import _SUPERLU_OPTIONS, FastAssembly, OrderedFactors, surface_edges
 from ._geometry import MeshSettings, suction_mesh
 from ._material import SkinLayers, bulk_modulus, thickness_stretch
 from ._probe import ProbeEdge
@@ -17,9 +17,6 @@ BOTTOM_CONDITIONS = ("fixed", "axial", "free")
 DEFAULT_PRESSURES_MBAR = np.arange(0.0, 101.0, 2.0)
 
 
-_SUPERLU_OPTIONS = {"SymmetricMode": True, "DiagPivotThresh": 0.1}
-
-
 def _factorize(K):
     # MMD on A^T+A in symmetric mode: the tangent is symmetric in pattern and in
     # value. SuperLU's default threshold (1.0) still swaps rows for any larger
@@ -27,18 +24,6 @@ def _factorize(K):
     # tangent of a stable equilibrium is positive definite, so diagonal pivots are
     # kept unless one is below a tenth of its column's largest entry
     return splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", options=_SUPERLU_OPTIONS)
-
-
-class _OrderedFactors:
-    """SuperLU factors of ``K[order][:, order]``, solving ``K x = b``."""
-
-    def __init__(self, lu, order):
-        self.lu, self.order = lu, order
-
-    def solve(self, b):
-        x = np.empty_like(b)
-        x[self.order] = self.lu.solve(b[self.order])
-        return x
 
 
 class TangentFactorizer:
@@ -75,7 +60,7 @@ class TangentFactorizer:
             A = K[self._rows][:, self._rows]
             if A.nnz == self._nnz:
                 lu = splu(A.tocsc(), permc_spec="NATURAL", options=_SUPERLU_OPTIONS)
-                return _OrderedFactors(lu, self._order)
+                return OrderedFactors(lu, self._order)
         A = K[self.free][:, self.free]  # in the model's own order: SuperLU orders it anew
         lu = _factorize(A)
         self._order = np.argsort(lu.perm_c)
