@@ -86,6 +86,24 @@ def test_scaling_law_of_the_moduli_and_the_pressure():
     np.testing.assert_allclose(scaled.deflection_mm, base.deflection_mm, rtol=1e-10, atol=1e-14)
 
 
+@pytest.mark.parametrize("length_scale", [2 / 3, 4 / 3])
+def test_geometric_similarity(length_scale):
+    """Every length of the model (aperture, layers, mesh, outer radius) scales with
+    the aperture, and the stresses depend on the strains only: scaling the aperture
+    and both thicknesses by s scales M by s at the same moduli and pressures. So the
+    aperture is not an axis of its own: (t_d/a, t_h/a) serves every probe."""
+    params = dict(x1d=0.02, x1h=4e-4, x2d=0.01, t_d=1.2, t_h=3.0, probe_mm=6.0)
+    pressures = [0.0, 20.0, 40.0, 60.0]
+    mesh = {"refinement": 0.5}
+    base = simulate(**params, pressures_mbar=pressures, mesh=mesh)
+    s = length_scale
+    scaled = simulate(**{**params, **{k: s * params[k] for k in ("t_d", "t_h", "probe_mm")}},
+                      pressures_mbar=pressures, mesh=mesh)
+    assert base.converged and scaled.converged and scaled.dofs == base.dofs
+    np.testing.assert_allclose(scaled.deflection_mm, s * base.deflection_mm, rtol=1e-10,
+                               atol=1e-14)
+
+
 def test_reference_deflections():
     """Independent estimate for X1d = 0.08, X1h = 4.1e-4 MPa, fixed bottom."""
     six = simulate(**REFERENCE, probe_mm=6, pressures_mbar=np.linspace(0, 100, 11))
