@@ -90,6 +90,7 @@ from ._shipped import (
     check_shipped_space,
     compare_ray_spaces,
     default_space_dir,
+    knife_edge_rays,
     resolve_space,
     ship_space,
     shipped_check_applies,
@@ -122,7 +123,7 @@ __all__ = [
     # the default space: the workflow's build here, else the one shipped with the package
     "WORKFLOW_SPACE_DIR", "SHIPPED_SPACE_DIR", "PROVENANCE_FILE", "SpaceSource",
     "default_space_dir", "resolve_space", "shipped_provenance", "verify_shipped_files",
-    "shipped_check_applies", "compare_ray_spaces", "check_shipped_space",
+    "shipped_check_applies", "compare_ray_spaces", "knife_edge_rays", "check_shipped_space",
     "ShippedSpaceMismatch", "ship_space", "SHIPPED_RTOL", "SHIPPED_ATOL_MM",
     # storage
     "AXES", "BOTTOMS", "COLUMNS", "DEFAULTS", "METADATA_KEY", "POINT_ID_PATTERN",
