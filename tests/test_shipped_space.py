@@ -151,8 +151,8 @@ def test_shipped_files_are_package_data_and_not_ignored_by_git():
     for p in shipped:
         rel = p.relative_to(ROOT / "src" / "skinsuction").as_posix()
         assert any(fnmatch.fnmatch(rel, pat) for pat in patterns), rel
-    if shutil.which("git") is None or not (ROOT / ".git").exists():
-        pytest.skip("not a git checkout")
+    # the tests run in a checkout (CI's is one): .gitignore must not hide the files
+    assert shutil.which("git") and (ROOT / ".git").exists(), "the tests run in a git checkout"
     res = subprocess.run(["git", "check-ignore", "--no-index", *map(str, shipped)], cwd=ROOT,
                          capture_output=True, text=True)
     assert res.returncode == 1 and not res.stdout, f"ignored by git: {res.stdout}"

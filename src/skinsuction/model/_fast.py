@@ -132,7 +132,6 @@ class FastAssembly:
         self.B = np.ascontiguousarray(B.reshape(ncells * nq, 2 * nn, 5))
         self.Bw = self.B * self.weight.T.reshape(-1, 1, 1)
         self.BT = np.ascontiguousarray(self.B.transpose(0, 2, 1))
-        self.BwT = np.ascontiguousarray(self.Bw.transpose(0, 2, 1))
 
         def per_point(x):
             return np.repeat(np.broadcast_to(np.asarray(x, float), (ncells,)), nq)
@@ -165,41 +164,35 @@ class FastAssembly:
             raise ValueError(f"solver must be 'qdldl' or 'superlu', not {solver!r}")
         self.solver = solver
         self._qdldl, self._upper_slots = None, None
-        self.superlu_fallbacks = 0
 
     # ---------------------------------------------------------------- sparsity
     def _pattern(self):
         """CSC structure of the free-DOF tangent, in a fill-reducing order found
         once, and the map from element-matrix entries to its data array."""
-        position = np.full(self.ndof, -1)
-        position[self.free] = np.arange(self.free.size)
-        rows = np.repeat(position[self.eldofs], self.eldofs.shape[1], axis=1).ravel()
-        cols = np.tile(position[self.eldofs], self.eldofs.shape[1]).ravel()
-        keep = (rows >= 0) & (cols >= 0)
         n = self.free.size
-        ones = sp.csc_matrix((np.ones(keep.sum()), (rows[keep], cols[keep])), shape=(n, n))
-        ones.sum_duplicates()
-        # minimum degree on A^T + A once (SuperLU would redo it at every factorisation)
-        lu = splu(ones * 1.0 + sp.identity(n, format="csc") * ones.shape[0],
-                  permc_spec="MMD_AT_PLUS_A", options=_SUPERLU_OPTIONS)
-        order = np.argsort(lu.perm_c)  # order[k]: the free DOF in position k
-        rank = np.empty(n, dtype=int)
-        rank[order] = np.arange(n)
-        self.order = order
-        position[self.free] = rank  # global DOF -> position in the kept order
-        self.position = position
-        r, c = position[self.eldofs], position[self.eldofs]
-        rows = np.repeat(r, r.shape[1], axis=1).ravel()
-        cols = np.tile(c, c.shape[1]).ravel()
+        index = np.full(self.ndof, -1)
+        index[self.free] = np.arange(n)
+        k = self.eldofs.shape[1]
+        rows = np.repeat(index[self.eldofs], k, axis=1).ravel()
+        cols = np.tile(index[self.eldofs], k).ravel()
         keep = (rows >= 0) & (cols >= 0)
-        key = cols[keep].astype(np.int64) * n + rows[keep]
-        unique, inverse = np.unique(key, return_inverse=True)
-        self.indices = (unique % n).astype(np.int32)
-        self.indptr = np.searchsorted(unique // n, np.arange(n + 1)).astype(np.int32)
+        rows, cols = rows[keep], cols[keep]
+        # minimum degree on A^T + A once (SuperLU would redo it at every
+        # factorisation); a dominant diagonal makes the pattern's matrix regular
+        pattern = sp.csc_matrix((np.ones(rows.size), (rows, cols)), shape=(n, n))
+        lu = splu(pattern + n * sp.identity(n, format="csc"),
+                  permc_spec="MMD_AT_PLUS_A", options=_SUPERLU_OPTIONS)
+        self.order = np.argsort(lu.perm_c)  # order[k]: the free DOF in position k
+        rank = np.empty(n, dtype=int)
+        rank[self.order] = np.arange(n)
+        self.position = np.full(self.ndof, -1)  # global DOF -> position in the kept order
+        self.position[self.free] = rank
+        keys = rank[cols].astype(np.int64) * n + rank[rows]
+        self._keys, self.slot = np.unique(keys, return_inverse=True)  # column-major slots
+        self.indices = (self._keys % n).astype(np.int32)
+        self.indptr = np.searchsorted(self._keys // n, np.arange(n + 1)).astype(np.int32)
         self.keep = np.flatnonzero(keep)
-        self.slot = inverse
-        self.nnz = unique.size
-        self._keys = unique  # column-major keys of the data slots, sorted
+        self.nnz = self._keys.size
 
     def _slots(self, row_dofs, col_dofs):
         """Data slots of the entries (row DOF, column DOF); -1 where either is fixed."""
@@ -288,7 +281,6 @@ class FastAssembly:
                 return OrderedFactors(self._qdldl, self.order)
             except ValueError:
                 self._qdldl = None  # a zero pivot: rebuilt from the next tangent
-                self.superlu_fallbacks += 1
         lu = splu(self.matrix(data), permc_spec="NATURAL", options=_SUPERLU_OPTIONS)
         return OrderedFactors(lu, self.order)
 
