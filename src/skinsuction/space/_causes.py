@@ -18,7 +18,7 @@ Examples
 --------
 >>> reg = default_registry()
 >>> sorted(reg)
-['dermis_thickness', 'pre_tension', 'strain_stiffening']
+['dermis_thickness', 'hypodermis_thickness', 'pre_tension', 'strain_stiffening']
 >>> c = reg["strain_stiffening"]
 >>> c.symbol, c.unit, c.value(coordinate=2.0, x1d=0.05)
 ('X2d', 'MPa', 0.1)
@@ -41,6 +41,10 @@ SCALES = {
     "log": (np.log10, lambda u: 10.0 ** u),
     "log1p": (lambda c: np.log10(1.0 + c), lambda u: 10.0 ** u - 1.0),
 }
+
+#: Model keywords that are layer thicknesses (mm): causes that a measured
+#: thickness (file header, study column, option) takes out of the diagnosis.
+GEOMETRY_KEYWORDS = ("t_d", "t_h")
 
 #: Name of the verdict "the neo-Hookean model explains the data".
 NONE = "none"
@@ -117,6 +121,11 @@ class Cause:
                                f"{self.symbol}/X1d" if self.modulus else self.symbol)
 
     @property
+    def geometric(self) -> bool:
+        """True for a layer thickness: not a free cause where the thickness is given."""
+        return self.keyword in GEOMETRY_KEYWORDS
+
+    @property
     def lower(self) -> float:
         return self.nodes[0]
 
@@ -180,6 +189,13 @@ DEFAULT_CAUSES = {
         hypothesis="the dermis is not 1 mm thick (in vivo about 0.5-2.5 mm with site "
                    "and age)",
         description="thickness of the dermis with the epidermis (mm)",
+    ),
+    "hypodermis_thickness": dict(
+        keyword="t_h", symbol="t_h", unit="mm", modulus=False, neutral=1.0, scale="log",
+        nodes=[0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0, 5.7, 8.0, 10.0],
+        hypothesis="the hypodermis is not 1 mm thick (on the forearm often several mm): "
+                   "the probe feels the bone less, or more, than the model assumes",
+        description="thickness of the hypodermis over a fixed bottom (mm)",
     ),
     "pre_tension": dict(
         keyword="prestretch", symbol="lambda0", unit="1", modulus=False, neutral=1.0,
