@@ -192,7 +192,7 @@ DEFAULT_CAUSES = {
     ),
     "hypodermis_thickness": dict(
         keyword="t_h", symbol="t_h", unit="mm", modulus=False, neutral=1.0, scale="log",
-        nodes=[0.5, 0.7, 1.0, 1.4, 2.0, 2.8, 4.0, 5.7, 8.0, 10.0],
+        nodes=[0.5, 0.75, 1.0, 1.5, 2.5, 5.0, 10.0],
         hypothesis="the hypodermis is not 1 mm thick (on the forearm often several mm): "
                    "the probe feels the bone less, or more, than the model assumes",
         description="thickness of the hypodermis over a fixed bottom (mm)",
