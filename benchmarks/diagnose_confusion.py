@@ -48,12 +48,21 @@ def _spaces(space_dir):
     return _SPACES
 
 
+_SOLVER = None
+
+
 def one_draw(job):
+    global _SOLVER
     from skinsuction.diagnose import Settings
     from skinsuction.diagnose._confusion import run_draw
+    from skinsuction.space import OnDemandRays
 
-    truth, seed, space_dir, settings, cache = job
-    return run_draw(truth, seed, _spaces(space_dir), Settings(**settings), cache_dir=cache)
+    truth, seed, space_dir, settings, cache, domain, ray_cache = job
+    spaces = _spaces(space_dir)
+    if _SOLVER is None:
+        _SOLVER = OnDemandRays(spaces["neo_hookean"].spec, cache_dir=ray_cache)
+    return run_draw(truth, seed, spaces, Settings(**settings), cache_dir=cache, domain=domain,
+                    on_demand=_SOLVER)
 
 
 def main(argv=None):
@@ -73,18 +82,33 @@ def main(argv=None):
     ap.add_argument("--cache", default="benchmarks/out/diagnose_confusion_fe",
                     help="folder of the draws' noise-free FE curves, reused when the "
                          "diagnosis changes ('' to solve every draw again)")
+    ap.add_argument("--given-dermis-sd", type=float, default=None, metavar="MM",
+                    help="draw the dermis thickness (uniform 0.5-2.5 mm) and give it in each "
+                         "file's header with a Gaussian error of this sd (e.g. 0.1): the "
+                         "diagnosis then uses it, and dermis_thickness is no cause; the "
+                         "neo-Hookean rays of each draw are solved on demand")
+    ap.add_argument("--probe-pairs", default="2+6,4+8",
+                    help="probe pairs drawn evenly (default 2+6,4+8)")
+    ap.add_argument("--ray-cache", default="benchmarks/out/on_demand",
+                    help="folder of the rays solved on demand")
     args = ap.parse_args(argv)
 
     from skinsuction.diagnose._confusion import UNDIAGNOSED, summarise
     from skinsuction.figures.detectability import plot_detectability
 
     spaces = _spaces(args.space_dir)
+    domain = {"probe_pairs": tuple(tuple(float(q) for q in pair.split("+"))
+                                   for pair in args.probe_pairs.split(","))}
     causes = [n for n in spaces if n != "neo_hookean"]
+    if args.given_dermis_sd is not None:
+        domain["given_dermis_thickness"] = {"range": (0.5, 2.5), "sd": args.given_dermis_sd}
+        causes = [n for n in causes if spaces[n].cause.keyword != "t_d"]
     settings = {} if args.repeats is None else {"repeats": args.repeats}
     if args.no_space_error:
         settings["space_error"] = False
     cache = args.cache or None
-    jobs = [(truth, args.seed + 100000 * k + i, args.space_dir, settings, cache)
+    jobs = [(truth, args.seed + 100000 * k + i, args.space_dir, settings, cache, domain,
+             args.ray_cache)
             for k, truth in enumerate(["none", *causes]) for i in range(args.per_cause)
             if args.truths is None or truth in args.truths]
     print(f"{len(jobs)} virtual experiments ({args.per_cause} per true cause), space "

@@ -1,12 +1,18 @@
-"""Make data/example_measured.csv: a synthetic suction test (not a measurement).
+"""Make the synthetic suction tests of data/ (not measurements).
 
-The FE model (skinsuction.model.simulate; reference mesh, fixed bottom, both
-layers 1 mm thick, neo-Hookean) at X1d = 0.04 MPa, X1h = 5.0e-4 MPa (both off
-the grid of the paper's space), pressures 0, 2, ..., 100 mbar, 6 mm and 2 mm
-probes, plus Gaussian noise of standard deviation 1.5 µm (NumPy seed 0) on every
-deflection but the one at 0 mbar (the instrument zero).
+The FE model (skinsuction.model.simulate; reference mesh, fixed bottom,
+neo-Hookean) at X1d = 0.04 MPa, X1h = 5.0e-4 MPa (both off the grid of the
+paper's space), pressures 0, 2, ..., 100 mbar, plus Gaussian noise of standard
+deviation 1.5 µm (NumPy seed 0) on every deflection but the one at 0 mbar (the
+instrument zero):
 
-    python data/make_example_measured.py [OUT.csv]
+* ``example_measured.csv``: 6 and 2 mm probes, both layers 1 mm (the paper's);
+* ``example_measured_4_8mm.csv``: the 4 and 8 mm probes, both layers 1 mm;
+* ``example_measured_layers.csv``: 6 and 2 mm probes on a 1.3 mm dermis over a
+  3 mm hypodermis, given in its header (``# dermis_thickness_mm: 1.3`` ...), as
+  a study that measured them by ultrasound would.
+
+    python data/make_example_measured.py [NAME ...]   # default: all three
 """
 
 import subprocess
@@ -24,12 +30,24 @@ SEED = 0
 PRESSURES = np.arange(0.0, 101.0, 2.0)
 
 
-def main(out=Path(__file__).with_name("example_measured.csv")):
+EXAMPLES = {
+    "example_measured.csv": dict(probes=(6.0, 2.0), t_d=1.0, t_h=1.0, given=False),
+    "example_measured_4_8mm.csv": dict(probes=(8.0, 4.0), t_d=1.0, t_h=1.0, given=False),
+    "example_measured_layers.csv": dict(probes=(6.0, 2.0), t_d=1.3, t_h=3.0, given=True),
+}
+
+
+def main(*names):
+    for name in names or EXAMPLES:
+        make(Path(__file__).with_name(name), **EXAMPLES[name])
+
+
+def make(out, probes, t_d, t_h, given):
     rng = np.random.default_rng(SEED)
     rows = []
-    for probe in (6.0, 2.0):
+    for probe in probes:
         c = simulate(X1D, X1H, probe_mm=probe, bottom="fixed", pressures_mbar=PRESSURES,
-                     mesh={"refinement": 1.0})
+                     t_d=t_d, t_h=t_h, mesh={"refinement": 1.0})
         if not c.converged:
             raise SystemExit(f"{probe:g} mm: the model did not converge ({c.reason})")
         m = c.deflection_mm + rng.normal(0.0, NOISE_SD_MM, PRESSURES.size)
@@ -41,11 +59,16 @@ def main(out=Path(__file__).with_name("example_measured.csv")):
                             capture_output=True, text=True, cwd=model_dir).stdout
     if status.strip():
         commit += " (model sources with uncommitted changes)"
+    layers = ("layers 1 mm" if (t_d, t_h) == (1.0, 1.0)
+              else f"dermis {t_d:g} mm, hypodermis {t_h:g} mm")
     header = [
         "# SYNTHETIC EXAMPLE, NOT A MEASUREMENT. Made by data/make_example_measured.py",
-        "# with the skinsuction FE model (reference mesh, fixed bottom, layers 1 mm, neo-Hookean)",
-        "# at X1d = 0.04 MPa and X1h = 5.0e-4 MPa, plus Gaussian noise of sd 1.5 um (seed 0).",
+        f"# with the skinsuction FE model (reference mesh, fixed bottom, {layers}, neo-Hookean)",
+        f"# at X1d = 0.04 MPa and X1h = 5.0e-4 MPa, {' and '.join(f'{p:g}' for p in probes)} mm "
+        "probes, plus Gaussian noise of sd 1.5 um (seed 0).",
         "subject: synthetic",
+        *([f"dermis_thickness_mm: {t_d:g}", "dermis_thickness_sd_mm: 0.1",
+           f"hypodermis_thickness_mm: {t_h:g}"] if given else []),
         f"x1d_true_mpa: {X1D:g}",
         f"x1h_true_mpa: {X1H:g}",
         f"noise_sd_um: {1e3 * NOISE_SD_MM:g}",

@@ -443,7 +443,9 @@ def test_workflow_plans_one_fe_job_per_ray(tmp_path):
         spec = RaySpec.from_config(sf)
         causes = registry_from_config(sf["causes"])
         # one job per (model, probe, ratio): the neutral rays once, in the neo-Hookean bundles
-        assert counts[name]["simulate_ray_bundle"] == 2 * len(spec.ratio_nodes) * (1 + len(causes))
+        n_probes = len(spec.probes_mm)
+        assert counts[name]["simulate_ray_bundle"] == (n_probes * len(spec.ratio_nodes)
+                                                       * (1 + len(causes)))
         assert counts[name]["assemble_scale_free_space"] == 1 + len(causes)
         assert counts[name]["scale_free_coverage"] == 1
         assert counts[name]["diagnose_measured"] == len(cfg["measured"])
@@ -451,7 +453,7 @@ def test_workflow_plans_one_fe_job_per_ray(tmp_path):
                      "diagnosis_fe_check"):
             assert counts[name][rule] == 1
         assert "make_example_measurement" not in counts[name]  # the example is shipped
-    assert counts["config"]["simulate_ray_bundle"] == 2 * 16 * 4
+    assert counts["config"]["simulate_ray_bundle"] == 4 * 16 * 5  # 2, 4, 6, 8 mm; 4 causes
 
 
 # ------------------------------------------------------- identify on the scale-free space
@@ -553,7 +555,8 @@ def test_confusion_draws_in_worker_processes_equal_one_process(monkeypatch):
 
     from skinsuction.diagnose import _confusion
 
-    def fake_draw(truth, seed, spaces, settings=None, domain=None, cache_dir=None):
+    def fake_draw(truth, seed, spaces, settings=None, domain=None, cache_dir=None,
+                  on_demand=None):
         rng = np.random.default_rng(seed)  # a stand-in for the FE runs and the fit
         return {"truth": truth, "seed": seed, "value": float(rng.normal()),
                 "named": truth, "pid": os.getpid(), "n_spaces": len(spaces)}

@@ -190,6 +190,7 @@ CI_DOMAIN = {
     "effects": {"strain_stiffening": ("log", 2.0, 28.0),
                 "dermis_thickness": ("uniform", 0.65, 2.1),
                 "pre_tension": ("uniform", 1.02, 1.24)},
+    "probe_pairs": ((2.0, 6.0),),  # the ci space has the 2 and 6 mm probes
 }
 
 

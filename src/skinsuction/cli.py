@@ -200,10 +200,12 @@ def _identify_arguments(p: argparse.ArgumentParser) -> None:
                         "space shipped with skinsuction; the space used is printed and "
                         "recorded in identification.json (space.source, space.description)")
     p.add_argument("--objective", choices=("single", "weighted", "ratio"), required=True,
-                   help="single: one probe (paper eq. 4); weighted: 2 and 6 mm curves, "
-                        "alpha on 2 mm (eq. 10); ratio: 6 mm / 2 mm deflections (eqs. 11-12)")
+                   help="single: one probe (paper eq. 4); weighted: the file's two probes "
+                        "(2 and 6 mm, or e.g. 4 and 8), alpha on the smaller (eq. 10); ratio: "
+                        "larger / smaller probe's deflections (eqs. 11-12)")
     p.add_argument("--probe", type=positive, default=6.0, metavar="MM",
-                   help="probe diameter in mm for --objective single (default 6)")
+                   help="probe diameter in mm for --objective single, any of 1-12 mm "
+                        "(default 6; Cutometer probes are 2, 4, 6 and 8 mm)")
     p.add_argument("--alpha", type=unit_interval, default=0.5,
                    help="weight of the 2 mm curve for --objective weighted, "
                         "dimensionless in [0, 1] (default 0.5)")
@@ -225,15 +227,21 @@ def _identify_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder: identification.json and fit.png / fit.pdf "
                         "(measured vs fitted curves, residuals)")
+    from skinsuction.measured._geometry import add_geometry_arguments
+
+    add_geometry_arguments(p)
 
 
 def _run_identify(args: argparse.Namespace) -> int:
     from skinsuction.identify.measured_fit import identify_measured, write_identification
+    from skinsuction.measured._geometry import thickness_from_args
 
     result = identify_measured(
         args.measured, args.space, objective=args.objective, probe_mm=args.probe,
         alpha=args.alpha, repeats=args.repeats, seed=args.seed, bottom=args.bottom,
         curve=args.curve, noise_um=args.noise_um, level=args.level,
+        thickness=thickness_from_args(args), solve_on_demand=not args.no_solve,
+        workers=args.workers,
     )
     try:
         paths = write_identification(result, args.out)

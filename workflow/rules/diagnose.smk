@@ -91,6 +91,8 @@ rule diagnose_measured:
         decision=DG.get("decision", {}),
         fit=DG.get("fit", {}),
         code=DG_FIG_CODE,
+        # rays of a probe or layers the space lacks, solved on demand, kept here
+        on_demand_dir="results/simulated_space/on_demand",
     threads: 1
     resources:
         mem_mb=3000,

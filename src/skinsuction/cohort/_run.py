@@ -20,6 +20,7 @@ __all__ = ["discover", "run_study", "study_rows", "RESULT_COLUMNS"]
 #: is renamed ``id_<name>``).
 RESULT_COLUMNS = (
     "row", "source", "sha256", "probes_mm", "objective", "n_points",
+    "dermis_thickness_mm", "hypodermis_thickness_mm", "layers_given",
     "x1d_mpa", "x1d_lower_mpa", "x1d_upper_mpa", "x1d_lower_open", "x1d_upper_open",
     "x1h_mpa", "x1h_lower_mpa", "x1h_upper_mpa", "x1h_lower_open", "x1h_upper_open",
     "e_dermis_kpa", "e_dermis_lower_kpa", "e_dermis_upper_kpa", "correlation_x1d_x1h",
@@ -107,7 +108,7 @@ def _init(ctx):
 
 def _objective_for(data):
     probes = {round(p, 6) for p in data.probes}
-    if {2.0, 6.0} <= probes:
+    if {2.0, 6.0} <= probes or len(probes) == 2:
         return {"objective": "weighted"}
     return {"objective": "single", "probe_mm": max(probes)}
 
@@ -162,13 +163,18 @@ def _analyse(job):
         row["e_dermis_lower_kpa"] = 6e3 * iv["X1d"]["lower"]
         row["e_dermis_upper_kpa"] = 6e3 * iv["X1d"]["upper"]
     warnings = list(ident["warnings"])
+    g = ident["geometry"]
+    row.update({"dermis_thickness_mm": g["dermis_thickness_mm"],
+                "hypodermis_thickness_mm": g["hypodermis_thickness_mm"],
+                "layers_given": ",".join(g["given"])})
     if ctx.get("ray_spaces") is not None:
         from skinsuction.diagnose._diagnose import diagnose
 
         try:
             diag = diagnose(data, ctx["ray_spaces"], ctx["settings"].__class__(
                 **{**ctx["settings"].__dict__, "seed": seed}),
-                source={"file": entry.source, "sha256": sha})
+                source={"file": entry.source, "sha256": sha},
+                on_demand=ctx["space"].on_demand)
             row.update(_diagnosis_columns(diag))
         except ValueError as err:
             warnings.append(f"diagnosis failed: {' '.join(str(err).split())}")
@@ -414,7 +420,7 @@ def run_study(path, out_dir, *, space_dir=None,
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     space = space if space is not None else load_space(space_dir)
-    entries = discover(path, available_probes=list(space.spaces),
+    entries = discover(path, available_probes=space.available_probes,
                        pressure_range_mbar=space.pressure_range(list(space.spaces)),
                        range_note=space.range_note(list(space.spaces)))
     settings = None

@@ -44,6 +44,8 @@ class AccuracyPoint:
     coordinate: float  # the cause's ray coordinate (NaN for the neo-Hookean model)
     p_max: float
     p_step: float
+    t_d: float = 1.0  # layer thicknesses, mm
+    t_h: float = 1.0
 
     @property
     def pressures_mbar(self) -> np.ndarray:
@@ -95,6 +97,8 @@ def normalised_error(fe_mm, space_mm) -> np.ndarray:
 def _model_keywords(space: RaySpace, point: AccuracyPoint) -> dict:
     kw = {"x1d": point.x1d, "x1h": point.x1d * point.ratio, "probe_mm": point.probe_mm,
           "bottom": space.spec.bottom}
+    if (point.t_d, point.t_h) != (1.0, 1.0):
+        kw.update(t_d=point.t_d, t_h=point.t_h)
     if space.cause is not None:
         kw.update(space.cause.simulate_keywords(point.coordinate, point.x1d))
     return kw

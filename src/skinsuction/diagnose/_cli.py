@@ -4,6 +4,7 @@
 
     skinsuction diagnose MEASURED.csv --out DIR [--space DIR]
         [--noise-um SD] [--alpha 0.01] [--delta-bic -10] [--seed 0] [--repeats 2]
+        [--dermis-thickness-mm MM] [--hypodermis-thickness-mm MM] [--no-solve]
 
 Bad input (file, spaces) raises ``ValueError`` subclasses with one-line messages
 (:class:`skinsuction.measured.MeasuredDataError`,
@@ -17,6 +18,8 @@ import argparse
 import sys
 
 from skinsuction._argtypes import non_negative, non_negative_int, number, positive, positive_int
+
+from skinsuction.measured._geometry import add_geometry_arguments, thickness_from_args
 
 from ._diagnose import Settings
 
@@ -43,7 +46,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("measured", metavar="MEASURED.csv",
                    help="measured curves, the format of `skinsuction identify`: columns "
                         "probe_mm, pressure_mbar, deflection_mm and optionally curve "
-                        "(replicate id); one or both probes (2 and 6 mm)")
+                        "(replicate id); one or more probes (2-8 mm); header lines may give the layer "
+                        "thicknesses (# dermis_thickness_mm: 1.3)")
     p.add_argument("--out", required=True, metavar="DIR",
                    help="output folder: report.json, report.md, fit.png/pdf, "
                         "residuals.png/pdf, gain.png/pdf")
@@ -75,6 +79,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         f"(default {d.level:g})")
     p.add_argument("--no-holdout", action="store_true",
                    help="skip the cross-probe holdout (faster)")
+    add_geometry_arguments(p)
 
 
 def command(args: argparse.Namespace) -> int:
@@ -90,7 +95,10 @@ def command(args: argparse.Namespace) -> int:
                         seed=args.seed, holdout=not args.no_holdout,
                         level=args.level)
     try:
-        report = diagnose_file(args.measured, args.space_dir, settings)
+        report = diagnose_file(args.measured, args.space_dir, settings,
+                               thickness=thickness_from_args(args),
+                               on_demand=False if args.no_solve else None,
+                               workers=args.workers)
     except (SpaceMissingError, SpaceFileError) as err:
         raise InputError(str(err)) from None
     try:

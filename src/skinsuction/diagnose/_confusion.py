@@ -45,8 +45,14 @@ WIDE_DOMAIN = {
     "effects": {
         "strain_stiffening": ("log", 1.0, 500.0),
         "dermis_thickness": ("uniform", 0.5, 2.5),
+        "hypodermis_thickness": ("log", 0.5, 10.0),
         "pre_tension": ("uniform", 1.01, 1.25),
     },
+    # the Cutometer's probe pairs, drawn evenly
+    "probe_pairs": ((2.0, 6.0), (4.0, 8.0)),
+    # None, or the dermis as measured by ultrasound: true t_d uniform in `range` (mm),
+    # given in the file's header with a Gaussian error of `sd` (mm), stated as its sd
+    "given_dermis_thickness": None,
 }
 
 
@@ -71,14 +77,34 @@ def draw_wide(seed: int, cause, domain=None, load_max=None) -> dict:
     if load_max is not None and p_max / x1d > load_max:  # beyond the space's reach
         p_max, p_step = d["protocols"][0]
     out = {"x1d": x1d, "ratio": ratio, "noise_um": noise, "p_max": p_max, "p_step": p_step,
-           "coordinate": None, "value": None}
+           "coordinate": None, "value": None, "probes": (2.0, 6.0), "t_d": 1.0,
+           "t_d_given": None}
     if cause is not None:
         kind, lo, hi = d["effects"][cause.name]
         c = math.exp(rng.uniform(math.log(lo), math.log(hi))) if kind == "log" \
             else rng.uniform(lo, hi)
         out["coordinate"] = c
         out["value"] = float(cause.value(c, x1d))
+    # drawn after the rest, so that a draw of the 2 + 6 mm probes is the one of before
+    pairs = d.get("probe_pairs") or ((2.0, 6.0),)
+    if len(pairs) > 1:
+        out["probes"] = tuple(float(q) for q in pairs[rng.integers(len(pairs))])
+    else:
+        out["probes"] = tuple(float(q) for q in pairs[0])
+    given = d.get("given_dermis_thickness")
+    if given:
+        out["t_d"] = float(rng.uniform(*given["range"]))
+        out["t_d_given"] = round(out["t_d"] + float(rng.normal(0.0, given["sd"])), 2)
     return out
+
+
+def _spaces_of_draw(spaces, d, on_demand):
+    """The spaces the diagnosis reads for a draw: at its probes and given layers."""
+    from skinsuction.space import Geometry, spaces_at
+
+    g = (Geometry(d["t_d_given"], 1.0, given=("t_d",), sd={"t_d": d["t_d_sd"]})
+         if d.get("t_d_given") is not None else Geometry())
+    return spaces_at(spaces, d["probes"], g, on_demand)[0]
 
 
 def _detectability(ve, spaces, settings, n_points, truth=None):
@@ -151,6 +177,8 @@ def _cache_key(d, mesh) -> dict:
     import json
 
     key = {k: d[k] for k in ("x1d", "ratio", "p_max", "p_step", "value")} | {"mesh": mesh}
+    if tuple(d.get("probes") or (2.0, 6.0)) != (2.0, 6.0) or d.get("t_d", 1.0) != 1.0:
+        key |= {"probes": list(d["probes"]), "t_d": d["t_d"]}
     return json.loads(json.dumps(key))
 
 
@@ -181,12 +209,14 @@ def _save_clean(path, d, mesh, clean):
 
 
 def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
-             cache_dir=None) -> dict:
+             cache_dir=None, on_demand=None) -> dict:
     """Draw, simulate, diagnose and judge one virtual experiment: one row.
 
     ``cache_dir``: where the noise-free FE curves of each draw are kept (one JSON
     per draw, keyed by its parameters and mesh), so that a change of the
     diagnosis is re-measured on the same curves without the FE runs.
+    ``on_demand``: the solver of the rays of layers the space lacks
+    (:class:`skinsuction.space.OnDemandRays`), for draws with a given dermis.
     """
     from skinsuction.measured import MeasuredDataError
 
@@ -197,27 +227,38 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     base = spaces[BASELINE]
     cause = None if truth == NONE else spaces[truth].cause
     d = draw_wide(seed, cause, domain, base.spec.load_max)
+    given = ({**WIDE_DOMAIN, **(domain or {})}.get("given_dermis_thickness") or {})
+    d["t_d_sd"] = given.get("sd")
     p = np.arange(0.0, d["p_max"] + 1e-9, d["p_step"])
     t0 = time.perf_counter()
     cache_path, clean = _cached_clean(cache_dir, truth, seed, d, base.spec.mesh)
     ve = virtual_experiment(d["x1d"], d["ratio"] * d["x1d"], cause, d["value"],
                             noise_um=d["noise_um"], seed=seed, pressures_mbar=p,
                             mesh=base.spec.mesh, bottom=base.spec.bottom,
-                            fallback=list(base.spec.fallback), clean=clean)
+                            fallback=list(base.spec.fallback), clean=clean,
+                            probes_mm=d["probes"],
+                            layers={"t_d": d["t_d"]} if d["t_d"] != 1.0 else None)
     if cache_path is not None and clean is None:
         _save_clean(cache_path, d, base.spec.mesh, ve.clean)
-    row = {"truth": truth, "seed": seed, **d, "x1h": ve.x1h, "fe_converged": ve.converged,
+    row = {"truth": truth, "seed": seed, **{k: v for k, v in d.items() if k != "probes"},
+           "x1h": ve.x1h, "fe_converged": ve.converged,
            "fe_seconds": time.perf_counter() - t0, "fe_cached": clean is not None}
     if truth == "pre_tension":
         row["initial_stress_kpa"] = initial_stress_kpa(d["value"], d["x1d"])
     if not ve.converged:
         row["named"] = "fe_failed"
         return row
-    row.update(_detectability(ve, spaces, settings, 2 * int((p > 0).sum()), truth))
+    row["probes"] = "+".join(f"{q:g}" for q in d["probes"])
+    drawn = _spaces_of_draw(spaces, d, on_demand)
+    row.update(_detectability(ve, drawn, settings, 2 * int((p > 0).sum()), truth))
+    header = ([f"dermis_thickness_mm: {d['t_d_given']:g}",
+               f"dermis_thickness_sd_mm: {d['t_d_sd']:g}"] if d["t_d_given"] is not None
+              else [])
     with tempfile.TemporaryDirectory() as tmp:
-        csv = write_csv(ve, Path(tmp) / "v.csv")
+        csv = write_csv(ve, Path(tmp) / "v.csv", header=header)
         try:
-            rep = diagnose_file(csv, None, settings, spaces=spaces)
+            rep = diagnose_file(csv, None, settings, spaces=spaces,
+                                on_demand=on_demand if on_demand is not None else False)
         except BeyondSpaceError:
             row.update(named="beyond_space", verdict="beyond_space")
             return row
@@ -317,11 +358,12 @@ _SHARED: dict = {}
 
 def _run_shared(job):
     truth, seed = job
-    return run_draw(truth, seed, _SHARED["spaces"], _SHARED["settings"])
+    return run_draw(truth, seed, _SHARED["spaces"], _SHARED["settings"],
+                    domain=_SHARED.get("domain"), on_demand=_SHARED.get("on_demand"))
 
 
 def run_draws(spaces: dict, per_cause: int, seed: int = 1000, settings=None,
-              workers: int = 1, progress=None) -> pd.DataFrame:
+              workers: int = 1, progress=None, domain=None, on_demand=None) -> pd.DataFrame:
     """``per_cause`` draws for ``none`` and every cause of ``spaces``: one row each.
 
     Seeds are ``seed + 100000 k + i`` for the k-th true cause (``none`` first), as in
@@ -332,11 +374,14 @@ def run_draws(spaces: dict, per_cause: int, seed: int = 1000, settings=None,
     """
     from skinsuction._progress import Progress
 
-    causes = [n for n in spaces if n != BASELINE]
+    given = {**WIDE_DOMAIN, **(domain or {})}.get("given_dermis_thickness")
+    # a given dermis is no cause: the others are drawn
+    causes = [n for n in spaces if n != BASELINE
+              and not (given and spaces[n].cause.keyword == "t_d")]
     jobs = [(truth, seed + 100000 * k + i)
             for k, truth in enumerate([NONE, *causes]) for i in range(int(per_cause))]
     bar = Progress(len(jobs), "detectability", "draws", progress) if progress else None
-    _SHARED.update(spaces=spaces, settings=settings)
+    _SHARED.update(spaces=spaces, settings=settings, domain=domain, on_demand=on_demand)
     rows = []
     try:
         if workers > 1 and len(jobs) > 1:

@@ -279,7 +279,8 @@ def _holdout(space, data, settings, seed):
     return main, detail
 
 
-def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=None) -> dict:
+def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=None,
+             geometry=None, on_demand=None) -> dict:
     """Diagnose loaded measured data (:class:`skinsuction.measured.MeasuredData`).
 
     Parameters
@@ -290,14 +291,31 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     settings : Settings
     source : dict, optional
         ``{"file": ..., "sha256": ...}`` of the input file for the report.
+    geometry : skinsuction.space.Geometry, optional
+        The layer thicknesses; by default those of the file's header lines (or a
+        study's columns), else the paper's 1 mm, stated as assumptions.  A given
+        thickness takes its cause out of the candidates.
+    on_demand : skinsuction.space.OnDemandRays, optional
+        Solves the neo-Hookean rays of a probe or layers the spaces lack; without
+        it such data raise an InputError.
 
     Returns
     -------
     dict
         The report (see the package docstring for its contract).
     """
+    from skinsuction.measured import geometry_of
+    from skinsuction.space import GeometryOutsideSpace, spaces_at
+
     t0, c0 = time.perf_counter(), time.process_time()
     settings = settings or Settings()
+    geometry_warnings = []
+    if geometry is None:
+        geometry, geometry_warnings = geometry_of(data)
+    try:
+        spaces, geometry_notes = spaces_at(spaces, data.probes, geometry, on_demand)
+    except GeometryOutsideSpace as err:
+        raise InputError(f"{data.path}: {err}") from None
     base_space = spaces[BASELINE]
     probes = [p for p in data.probes if base_space.has_probe(p)]
     skipped = [p for p in data.probes if not base_space.has_probe(p)]
@@ -418,8 +436,9 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         "input": {**(source or {}), "probes_mm": [float(p) for p in probes],
                   "probes_skipped_mm": [float(p) for p in skipped],
                   "metadata": dict(getattr(data, "metadata", {}) or {}),
-                  "warnings": list(getattr(data, "warnings", ()) or ()),
+                  "warnings": list(getattr(data, "warnings", ()) or ()) + geometry_warnings,
                   "curves": data_info},
+        "geometry": {**geometry.to_dict(), "notes": geometry_notes},
         "noise_um": noise.sd_um,
         "noise": {**noise.to_dict(),
                   "sigma_fitted_um": {f"{p:g}": sigma[p] for p in probes},
@@ -498,6 +517,9 @@ def summary_text(report: dict) -> str:
     b = report["baseline"]
     s = (f"Neo-Hookean fit: {_params_text(b['parameters'])}, E = {b['E_um']:.3g} µm "
          f"(noise {report['noise_um']:.2g} µm per point, {report['noise']['method']}). ")
+    g = report.get("geometry") or {}
+    if g.get("assumptions"):
+        s += "ASSUMED: " + "; ".join(g["assumptions"]) + ". "
     s += _beyond_text(report)
     if report["cause"] == BEYOND_SPACE:
         return s + "No cause can be named until the space covers the fit."
@@ -536,7 +558,8 @@ def summary_text(report: dict) -> str:
 
 
 def diagnose_file(measured_path, space_dir=None, settings: Settings | None = None,
-                  spaces: dict | None = None) -> dict:
+                  spaces: dict | None = None, *, thickness: dict | None = None,
+                  on_demand=None, workers: int = 1) -> dict:
     """Read a measured CSV (as ``skinsuction identify`` does) and diagnose it.
 
     ``space_dir``: the scale-free space; by default the workflow's build in
@@ -544,11 +567,14 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
     one, else the default space shipped with skinsuction
     (:func:`skinsuction.space.resolve_space`).  ``input.space`` of the report
     says which.  ``spaces``: the ray spaces already read (from ``space_dir``).
+    ``thickness``: ``dermis_thickness_mm`` ... overriding the file's header lines.
+    ``on_demand``: an :class:`skinsuction.space.OnDemandRays`, False to refuse a
+    probe or layers the spaces lack, or None to solve them (``workers`` processes).
     """
     from skinsuction._files import file_sha256
-    from skinsuction.measured import load_measured
+    from skinsuction.measured import geometry_of, load_measured
 
-    from skinsuction.space import read_ray_spaces, resolve_space
+    from skinsuction.space import OnDemandRays, read_ray_spaces, resolve_space
 
     if spaces is None or space_dir is not None:
         src = resolve_space(space_dir)
@@ -559,7 +585,8 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
         spaces = read_ray_spaces(space_dir)
     base = spaces[BASELINE]
     sp = base.spec
-    data = load_measured(measured_path, available_probes=list(base.probes_mm),
+    data = load_measured(measured_path, available_probes=None if on_demand is not False
+                         else list(base.probes_mm),
                          pressure_range_mbar=(0.0, sp.reach_mbar()),
                          range_note=(f"the reach of the scale-free space: p/X1d <= "
                                      f"{sp.load_max:g} mbar/MPa up to X1d = "
@@ -567,4 +594,10 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
     source = {"file": str(measured_path), "sha256": file_sha256(measured_path),
               "space_dir": str(space_dir) if space_dir is not None else None,
               "space": space_info}
-    return diagnose(data, spaces, settings, source=source)
+    geometry, warnings = geometry_of(data, **(thickness or {}))
+    solver = None
+    if on_demand is not False:
+        solver = on_demand if on_demand not in (None, True) else OnDemandRays(sp, workers=workers)
+    report = diagnose(data, spaces, settings, source=source, geometry=geometry, on_demand=solver)
+    report["input"]["warnings"] = warnings + report["input"]["warnings"]
+    return report

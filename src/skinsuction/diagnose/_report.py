@@ -81,6 +81,7 @@ def report_markdown(report: dict, figures=None) -> str:
            else "") + f"); accuracy of the spaces {report['noise']['model_error_um']:g} µm "
         "added in quadrature",
         *_space_lines(report["input"]),
+        *_geometry_lines(report.get("geometry")),
         "",
         "## Neo-Hookean fit (baseline)",
         "",
@@ -137,6 +138,21 @@ def report_markdown(report: dict, figures=None) -> str:
         lines.append("")
     lines.append(f"Run time {report['seconds']:.1f} s; skinsuction {report.get('skinsuction_version')}.")
     return "\n".join(lines) + "\n"
+
+
+def _geometry_lines(g) -> list:
+    if not g:
+        return []
+    given = set(g.get("given") or [])
+    def one(key, name):
+        sd = g.get(f"{name}_sd_mm")
+        v = g[f"{name}_mm"]
+        return (f"{v:g} mm" + (f" ± {sd:g}" if sd else "")
+                + (" (given)" if key in given else " (**assumed**, the paper's)"))
+    out = [f"- layers: dermis {one('t_d', 'dermis_thickness')}, hypodermis "
+           f"{one('t_h', 'hypodermis_thickness')} over a fixed bottom"]
+    out += [f"- geometry: {n}" for n in g.get("notes") or []]
+    return out
 
 
 def write_report(report: dict, out_dir, figures: bool = True) -> dict:

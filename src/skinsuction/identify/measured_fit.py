@@ -57,11 +57,15 @@ OBJECTIVE_KINDS = ("single", "weighted", "ratio")
 SPREAD_WARNING = 0.05
 
 
-def _probes_of(objective: str, probe_mm: float) -> list:
-    """Probes (mm) an objective needs."""
+def _probes_of(objective: str, probe_mm: float, data_probes=()) -> list:
+    """Probes (mm) an objective needs: the single one; for two probes, the file's two
+    (e.g. 4 and 8 mm), else the paper's 2 and 6 mm."""
     if objective not in OBJECTIVE_KINDS:
         raise InputError(f"objective must be one of {OBJECTIVE_KINDS}, got {objective!r}")
-    return [float(probe_mm)] if objective == "single" else [2.0, 6.0]
+    if objective == "single":
+        return [float(probe_mm)]
+    probes = sorted(float(p) for p in data_probes)
+    return probes if len(probes) == 2 else [2.0, 6.0]
 
 
 def _pick_curve(data, probe, curve_id, path):
@@ -96,6 +100,9 @@ def identify_measured(
     spaces: dict | None = None,
     noise_um: float | None = None,
     level: float = 0.95,
+    thickness: dict | None = None,
+    solve_on_demand: bool = True,
+    workers: int = 1,
 ) -> dict:
     """Identify (X1d, X1h) of the measured curves in ``measured_path``.
 
@@ -138,6 +145,14 @@ def identify_measured(
     level : float
         Confidence level of the profile-likelihood intervals
         (:func:`skinsuction.identify.profile_intervals`).
+    thickness : dict, optional
+        ``dermis_thickness_mm``, ``hypodermis_thickness_mm`` and their ``_sd_mm``:
+        override the file's header lines (:func:`skinsuction.measured.geometry_of`).
+    solve_on_demand : bool
+        Solve the neo-Hookean rays of a probe or layers the scale-free space lacks
+        (:class:`skinsuction.space.OnDemandRays`); False refuses such a file.
+    workers : int
+        Processes for those solves.
 
     Returns
     -------
@@ -151,15 +166,24 @@ def identify_measured(
     """
     from skinsuction.measured import load_measured
 
+    from skinsuction.measured import geometry_of
+
     _check_settings(alpha, repeats, seed, noise_um, level)
-    space = load_space(space_path, bottom) if spaces is None else LoadedSpace.given(spaces)
-    probes_needed = space.check_probes(_probes_of(objective, probe_mm))
-    data = load_measured(measured_path, available_probes=list(space.spaces),
-                         pressure_range_mbar=space.pressure_range(probes_needed),
-                         range_note=space.range_note(probes_needed))
+    space = (load_space(space_path, bottom, solve_on_demand=solve_on_demand, workers=workers)
+             if spaces is None else LoadedSpace.given(spaces))
+    data = load_measured(measured_path, available_probes=space.available_probes)
+    geometry, geometry_warnings = geometry_of(data, **(thickness or {}))
+    space = space.at(geometry)
+    probes_needed = space.check_probes(_probes_of(objective, probe_mm, data.probes))
+    # the pressures against the space's reach, with the loader's located message
+    load_measured(measured_path, available_probes=space.available_probes,
+                  pressure_range_mbar=space.pressure_range(probes_needed),
+                  range_note=space.range_note(probes_needed))
     result = identify_data(data, space, objective=objective, probe_mm=probe_mm, alpha=alpha,
                            repeats=repeats, seed=seed, curve=curve,
-                           window_focusing=window_focusing, noise_um=noise_um, level=level)
+                           window_focusing=window_focusing, noise_um=noise_um, level=level,
+                           geometry=geometry)
+    result["warnings"] = geometry_warnings + result["warnings"]
     result["input"]["sha256"] = file_sha256(measured_path)
     return result
 
@@ -167,7 +191,8 @@ def identify_measured(
 def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_mm: float = 6.0,
                   alpha: float = 0.5, repeats: int = 100, seed: int = 0,
                   curve: str | None = None, window_focusing: dict | None = None,
-                  noise_um: float | None = None, level: float = 0.95) -> dict:
+                  noise_um: float | None = None, level: float = 0.95,
+                  geometry=None) -> dict:
     """Identify (X1d, X1h) of loaded curves (:class:`skinsuction.measured.MeasuredData`).
 
     The work of :func:`identify_measured` once the file and the space are read
@@ -198,8 +223,14 @@ def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_
     """
     from skinsuction import __version__
 
+    from skinsuction.measured import geometry_of
+
     _check_settings(alpha, repeats, seed, noise_um, level)
-    probes_needed = space.check_probes(_probes_of(objective, probe_mm))
+    geometry_warnings = []
+    if geometry is None:
+        geometry, geometry_warnings = geometry_of(data)
+    space = space.at(geometry)
+    probes_needed = space.check_probes(_probes_of(objective, probe_mm, data.probes))
     spaces = {p: space.probe(p) for p in probes_needed}
     space_info = space.info
     bottom = space.bottom
@@ -207,18 +238,10 @@ def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_
     for c in data.curves:
         space.probe(c.probe_mm)  # every curve must have a space (the loader checks a file)
     curves = {p: _pick_curve(data, p, curve, measured_path) for p in probes_needed}
-    data_warnings = list(getattr(data, "warnings", ()))
-
-    if objective == "single":
-        (p,) = probes_needed
-        obj = single_objective(spaces[p], curves[p])
-    elif objective == "weighted":
-        obj = weighted_objective(spaces[2.0], curves[2.0], spaces[6.0], curves[6.0], alpha=alpha)
-    else:
-        try:
-            obj = ratio_objective(spaces[2.0], curves[2.0], spaces[6.0], curves[6.0])
-        except ValueError as err:
-            raise InputError(f"{measured_path}: ratio objective: {err}") from None
+    data_warnings = list(getattr(data, "warnings", ())) + geometry_warnings
+    data_warnings += [f"geometry: {a}" for a in geometry.assumptions()]
+    data_warnings += [f"geometry: {n}" for n in space.notes(probes_needed)]
+    obj = _objective(objective, spaces, curves, probes_needed, alpha, measured_path)
     wf = {"n_samples": 1000, "n_best": 20, "tolerance": 1e-6, "max_iter": 200,
           **(window_focusing or {})}
     try:
@@ -267,6 +290,9 @@ def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_
 
     noise, intervals = _noise_and_intervals(obj, objective, curves, data, est_theta,
                                             noise_um, float(level), warnings, scale_free)
+    thickness_effect = _thickness_uncertainty(space, geometry, objective, curves,
+                                              probes_needed, alpha, measured_path, est_theta,
+                                              est, intervals, float(level), warnings, noise)
 
     fit = {}
     for p, c in curves.items():
@@ -329,12 +355,107 @@ def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_
                        "converged_fraction": float(rep.converged.mean())},
         "noise": noise,
         "intervals": intervals,
+        "geometry": {**geometry.to_dict(), "notes": space.notes(probes_needed),
+                     "thickness_uncertainty": thickness_effect},
         "fit": fit,
         "runs": [{"x1d_mpa": float(x[0]), "x1h_mpa": float(x[1]), "E": float(e),
                   "iterations": int(n)}
                  for x, e, n in zip(runs_mpa, rep.E, rep.iterations)],
         "warnings": warnings,
     }
+
+
+def _objective(objective, spaces, curves, probes, alpha, measured_path):
+    if objective == "single":
+        (p,) = probes
+        return single_objective(spaces[p], curves[p])
+    small, large = probes
+    if objective == "weighted":
+        return weighted_objective(spaces[small], curves[small], spaces[large], curves[large],
+                                  alpha=alpha)
+    try:
+        return ratio_objective(spaces[small], curves[small], spaces[large], curves[large])
+    except ValueError as err:
+        raise InputError(f"{measured_path}: ratio objective: {err}") from None
+
+
+def _thickness_uncertainty(space, geometry, objective, curves, probes, alpha, measured_path,
+                           theta, est, intervals, level, warnings, noise=None):
+    """Widen the intervals for the sd of the given thicknesses (Laplace approximation).
+
+    For each thickness ``t`` given with an sd, the fit is polished again, from the
+    estimate, on the rays of ``t - sd`` and ``t + sd``.  With ``c(t)``, the chi2 of
+    the fit at ``t`` (the noise sd of the intervals), the thickness is a nuisance
+    parameter with the Gaussian prior ``(t - t0) / sd``: its posterior sd is
+    ``1 / sqrt(1 / sd^2 + c''(t0) / 2)`` (the curves may pin it down better than
+    the prior), and the moduli move by ``d log X / dt`` (central difference) times
+    it.  The interval half-widths (in log) are combined with ``z`` times these
+    moves in quadrature (``z`` the normal quantile of the level).  Returns, per
+    thickness, the sensitivities, the posterior sd and the thickness the curves
+    prefer within the prior (reported, not used).
+    """
+    from scipy import stats
+
+    sds = {k: v for k, v in (geometry.sd or {}).items() if v and v > 0}
+    if not sds or space.rays is None:
+        return None
+    sigma_mm = 1e-3 * float((noise or {}).get("sd_um") or 0.0)
+
+    def fit_at(g):
+        moved = space.at(g)
+        spaces = {p: moved.probe(p) for p in probes}
+        obj = _objective(objective, spaces, curves, probes, alpha, measured_path)
+        th = polish(obj, np.asarray(theta, dtype=float))
+        ss = 0.0
+        for p, c in curves.items():
+            m = single_objective(spaces[p], c).curves(th.reshape(1, 2))[0]
+            ss += float(np.nansum((c.deflection_mm - m) ** 2))
+        for n in moved.notes(probes):
+            if n not in space.notes(probes) and n not in notes_seen:
+                notes_seen.append(n)
+        return obj.to_moduli(th)[0], ss
+
+    notes_seen = []
+    _, ss0 = fit_at(geometry)
+    out = {}
+    for key, sd in sds.items():
+        lo, ss_lo = fit_at(geometry.shifted(key, -sd))
+        hi, ss_hi = fit_at(geometry.shifted(key, sd))
+        d = (np.log(hi) - np.log(lo)) / 2  # d log X per sd
+        if sigma_mm > 0:
+            c_lo, c0, c_hi = (x / sigma_mm ** 2 for x in (ss_lo, ss0, ss_hi))
+            k = max((c_hi - 2 * c0 + c_lo) / sd ** 2, 0.0)
+            g = (c_hi - c_lo) / (2 * sd)
+            post_sd = 1.0 / math.sqrt(1.0 / sd ** 2 + k / 2)
+            preferred = geometry_value = getattr(geometry, key)
+            preferred = geometry_value - g / (k + 2 / sd ** 2)
+        else:
+            post_sd, preferred = sd, None
+        name = {"t_d": "dermis_thickness", "t_h": "hypodermis_thickness"}[key]
+        out[name] = {
+            "sd_mm": sd, "posterior_sd_mm": post_sd,
+            "preferred_by_the_curves_mm": preferred,
+            "d_log_X1d_per_sd": float(d[0]), "d_log_X1h_per_sd": float(d[1]),
+            "X1d_change_percent_per_sd": float(100 * np.expm1(d[0])),
+            "X1h_change_percent_per_sd": float(100 * np.expm1(d[1])),
+            "log_shift": [float(abs(d[0]) * post_sd / sd), float(abs(d[1]) * post_sd / sd)]}
+    warnings += [f"geometry (thickness +- 1 sd): {n}" for n in notes_seen]
+    if intervals is not None:
+        z = float(stats.norm.ppf(0.5 + level / 2))
+        for i, name in enumerate(("X1d", "X1h")):
+            iv = intervals.get(name)
+            if not iv:
+                continue
+            g = math.sqrt(sum(v["log_shift"][i] ** 2 for v in out.values()))
+            e = float(est[i])
+            for side, sign in (("lower", -1), ("upper", 1)):
+                h = abs(math.log(iv[side] / e)) if iv[side] and iv[side] > 0 else 0.0
+                iv[side] = e * math.exp(sign * math.hypot(h, z * g))
+            iv["includes_thickness_sd"] = True
+        intervals["notes"] = list(intervals.get("notes", [])) + [
+            "the intervals include the sd of the given thicknesses (Laplace approximation: "
+            "the fit at each thickness +- 1 sd, a Gaussian prior on the thickness)"]
+    return out
 
 
 def _check_settings(alpha, repeats, seed, noise_um, level):

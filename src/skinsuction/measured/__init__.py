@@ -18,6 +18,13 @@ UTF-8 text (a byte-order mark is allowed), comma-separated, one header line::
 * Lines starting with ``#`` are comments, kept in ``MeasuredData.comments``;
   ``# key: value`` comments also go to ``MeasuredData.metadata`` (a later key
   overrides an earlier one).  Blank lines are ignored.
+* The subject's layer thicknesses, measured on the same site (ultrasound, OCT),
+  may be given as ``# dermis_thickness_mm: 1.3`` and ``# hypodermis_thickness_mm:
+  3.0``, each with an optional standard deviation (``# dermis_thickness_sd_mm:
+  0.1``); a study table may give them as columns of the same names.  They are
+  checked (a number, positive, plausible, not µm: a located error otherwise) and
+  used by ``identify``, ``diagnose`` and ``study`` (:func:`geometry_of`); a
+  thickness not given is the paper's 1 mm, stated in every output.
 * One file may hold several probes and several curves per probe.  A curve is
   the set of rows with the same (``probe_mm``, ``curve``); without a ``curve``
   column every probe has exactly one curve.  Within a curve the pressures must
@@ -92,6 +99,7 @@ from ._checks import (
     PA_ABOVE_MBAR,
     UM_ABOVE_MM,
 )
+from ._geometry import DEFAULT_LAYERS_MM, GEOMETRY_KEYS, Geometry, check_geometry_metadata, geometry_of
 from ._load import StudyEntry, load_measured, load_table
 from ._types import (
     MAX_FILE_BYTES,
@@ -114,4 +122,5 @@ __all__ = [
     "load_table", "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS", "MAX_POINTS_PER_CURVE",
     "MAX_ROWS_PER_FILE", "MAX_FILE_BYTES", "PA_ABOVE_MBAR", "BAR_AT_MOST_MBAR", "UM_ABOVE_MM",
     "M_BELOW_MM", "APERTURE_LIMIT", "APERTURE_FLOOR", "LOW_PRESSURE_MBAR",
+    "GEOMETRY_KEYS", "Geometry", "DEFAULT_LAYERS_MM", "check_geometry_metadata", "geometry_of",
 ]

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._checks import _check_curve, _check_space, _label
+from ._geometry import check_geometry_metadata
 from ._types import (
     MAX_FILE_BYTES,
     MAX_POINTS_PER_CURVE,
@@ -119,6 +120,7 @@ def _lines(text: str):
 
 def _parse(path, text: str, line_numbers=None):
     comments, metadata, header, groups = [], {}, None, {}
+    meta_lines = {}
     lines = _lines(text)
     numbers = range(1, len(lines) + 1) if line_numbers is None else line_numbers
     for lineno, line in zip(numbers, lines):
@@ -132,6 +134,7 @@ def _parse(path, text: str, line_numbers=None):
             key, sep, value = comment.partition(":")
             if sep and key.strip():
                 metadata[key.strip()] = value.strip()
+                meta_lines[key.strip()] = lineno
             continue
         if header is None:
             header = _header(path, lineno, line)
@@ -170,7 +173,7 @@ def _parse(path, text: str, line_numbers=None):
         )
     if not groups:
         raise MeasuredDataError(path, last, None, "no data rows after the header")
-    return header, groups, comments, metadata
+    return header, groups, comments, metadata, meta_lines
 
 
 def load_measured(
@@ -207,8 +210,13 @@ def load_measured(
 
 def _load_text(path, text, line_numbers, available_probes=None, pressure_range_mbar=None,
                range_note=None, metadata=None) -> MeasuredData:
-    _, groups, comments, file_metadata = _parse(path, text, line_numbers)
+    _, groups, comments, file_metadata, meta_lines = _parse(path, text, line_numbers)
     metadata = {**file_metadata, **(metadata or {})}
+    # the layer thicknesses: a header line names its line; a study column its first row
+    first_row = min(r.lines[0] for r in groups.values())
+    lines = {k: meta_lines.get(k, first_row) if k in (metadata or {}) and k not in file_metadata
+             else meta_lines.get(k) for k in metadata}
+    check_geometry_metadata(path, metadata, lines)
     warnings = []
     for rows in groups.values():
         warnings += _check_curve(path, rows)

@@ -16,7 +16,8 @@ Modules: ``_storage`` (point ids, curve files, Parquet with provenance),
 database), ``_interpolate`` (a grid of one probe, :class:`GriddedSpace`, and
 cubic Lagrange with its NaN policy), ``_causes`` (the cause coordinates of the
 scale-free space), ``_rays``, ``_ray_solve`` and ``_ray_interpolate`` (the
-scale-free layout), ``_open`` (either layout, per probe), ``_shipped`` (the
+scale-free layout), ``_geometry`` (the spaces of one measurement at its probes and layer
+thicknesses, rays solved on demand), ``_open`` (either layout, per probe), ``_shipped`` (the
 default space: the workflow's build in the working directory, else the one
 shipped with the package; comparing and shipping builds).
 
@@ -42,6 +43,14 @@ from ._causes import (
     Cause,
     default_registry,
     registry_from_config,
+)
+from ._geometry import (
+    DEFAULT_LAYERS_MM,
+    Geometry,
+    GeometryOutsideSpace,
+    OnDemandRays,
+    default_cache_dir,
+    spaces_at,
 )
 from ._grid import (
     SimulatedSpace,
@@ -144,4 +153,7 @@ __all__ = [
     "build_ray_spaces", "bundle_id", "compute_bundle", "compute_ray", "coverage_frontier",
     "parse_ray_id", "ray_bundles", "ray_id", "rays_of", "read_ray_space", "read_ray_spaces",
     "NeoHookeanSlice", "RayInterpolant", "TabulatedInterpolant",
+    # every probe and the subject's layers
+    "DEFAULT_LAYERS_MM", "Geometry", "GeometryOutsideSpace", "OnDemandRays",
+    "default_cache_dir", "spaces_at",
 ]

@@ -17,13 +17,17 @@ from skinsuction._files import file_sha256
 from skinsuction.errors import InputError
 
 from ._causes import BASELINE
+from ._geometry import Geometry, GeometryOutsideSpace, OnDemandRays, spaces_at
 from ._grid import read_space
 from ._interpolate import GriddedSpace
 from ._ray_interpolate import NeoHookeanSlice
 from ._rays import read_ray_space, read_ray_spaces
 from ._shipped import resolve_space
 
-__all__ = ["ProbeSpace", "LoadedSpace", "load_space"]
+__all__ = ["ProbeSpace", "LoadedSpace", "load_space", "APERTURE_RANGE_MM"]
+
+#: Apertures (mm) the scale-free space accepts (rays of others are solved on demand).
+APERTURE_RANGE_MM = (1.0, 12.0)
 
 
 class ProbeSpace(Protocol):
@@ -87,7 +91,7 @@ def _read_scale_free(path: Path, bottom):
         raise InputError(f"{path}: the scale-free space has bottom {space.spec.bottom!r}, "
                          f"not {bottom!r}")
     slices = {p: NeoHookeanSlice(space, p) for p in space.probes_mm}
-    return slices, space.metadata, (0.0, space.spec.reach_mbar())
+    return slices, space.metadata, (0.0, space.spec.reach_mbar()), space
 
 
 def _read_space(space_path, bottom):
@@ -116,7 +120,7 @@ def _read_space(space_path, bottom):
             raise InputError(f"{path}: the {probe:g} mm space is not a usable grid ({err})") from None
     p_range = (max(float(s.pressure_mbar[0]) for s in spaces.values()),
                min(float(s.pressure_mbar[-1]) for s in spaces.values()))
-    return spaces, space.metadata, p_range
+    return spaces, space.metadata, p_range, None
 
 
 
@@ -129,22 +133,78 @@ class LoadedSpace:
     :class:`ProbeSpace`); ``info`` describes the file for the outputs.
     """
 
-    def __init__(self, spaces: dict, info: dict, p_range=None, bottom: str = "fixed"):
+    def __init__(self, spaces: dict, info: dict, p_range=None, bottom: str = "fixed",
+                 rays=None, geometry: Geometry | None = None, on_demand=None, _shared=None):
         self.spaces, self.info, self._p_range, self.bottom = spaces, info, p_range, bottom
+        #: the neo-Hookean ray space of a scale-free space (None for a grid)
+        self.rays = rays
+        self.geometry = geometry or Geometry()
+        #: solver of rays for a probe or layers the scale-free space lacks (None: refused)
+        self.on_demand = on_demand
+        self._shared = {} if _shared is None else _shared  # slices by (probe, geometry)
 
     @classmethod
     def given(cls, spaces: dict, bottom: str = "fixed") -> "LoadedSpace":
         return cls(spaces, {"path": None, "sha256": None, "name": "given in memory"},
                    None, bottom)
 
+    @property
+    def available_probes(self):
+        """Probes (mm) a measured file may hold: those of a grid; any for rays (None)."""
+        return None if self.rays is not None else list(self.spaces)
+
+    def at(self, geometry: Geometry) -> "LoadedSpace":
+        """This space for a measurement with layers ``geometry`` (shares its caches)."""
+        return LoadedSpace(self.spaces, self.info, self._p_range, self.bottom, self.rays,
+                           geometry, self.on_demand, self._shared)
+
+    def notes(self, probes) -> list:
+        """What the geometry of :meth:`probe` assumed or solved, for the outputs."""
+        out = []
+        for p in probes:
+            for n in self._shared.get(("notes", float(p), self._geometry_key()), []):
+                if n not in out:
+                    out.append(n)
+        return out
+
+    def _geometry_key(self):
+        return (round(self.geometry.t_d, 6), round(self.geometry.t_h, 6))
+
     def probe(self, p: float):
-        """The space of probe ``p`` (to 1e-6 mm); InputError naming the probes if absent."""
-        for q, s in self.spaces.items():
-            if math.isclose(float(p), float(q), abs_tol=1e-6):
-                return s
-        have = ", ".join(f"{q:g}" for q in self.spaces)
-        raise InputError(f"{self.info['path']}: the simulated space has no {float(p):g} mm "
-                         f"probe (probes: {have} mm)")
+        """The space of probe ``p`` (to 1e-6 mm) at :attr:`geometry`.
+
+        On a grid, only its probes and layers; InputError naming them otherwise.
+        On the scale-free space, any aperture of :data:`APERTURE_RANGE_MM` and any
+        layers: rays the space lacks are solved on demand if :attr:`on_demand`
+        allows it, else an InputError says how.
+        """
+        if self.rays is None:
+            for q, s in self.spaces.items():
+                if math.isclose(float(p), float(q), abs_tol=1e-6):
+                    if not self.geometry.is_default:
+                        raise InputError(
+                            f"{self.info['path']}: a grid space has only the paper's 1 mm "
+                            f"layers, not t_d = {self.geometry.t_d:g}, t_h = "
+                            f"{self.geometry.t_h:g} mm (use the scale-free space)")
+                    return s
+            have = ", ".join(f"{q:g}" for q in self.spaces)
+            raise InputError(f"{self.info['path']}: the simulated space has no {float(p):g} mm "
+                             f"probe (probes: {have} mm)")
+        lo, hi = APERTURE_RANGE_MM
+        if not lo <= float(p) <= hi:
+            raise InputError(f"probe diameter {float(p):g} mm is outside the apertures the model "
+                             f"is meant for ({lo:g}-{hi:g} mm; Cutometer probes are 2, 4, 6, 8 mm)")
+        key = (float(p), self._geometry_key())
+        if key not in self._shared:
+            try:
+                spaces, notes = spaces_at({BASELINE: self.rays}, [float(p)], self.geometry,
+                                          self.on_demand)
+            except GeometryOutsideSpace as err:
+                raise InputError(f"{self.info['path']}: {err} (the command-line option "
+                                 "--no-solve refuses it; drop it)") from None
+            self._shared[key] = NeoHookeanSlice(spaces[BASELINE], float(p))
+            self._shared[("notes", *key)] = notes
+        return self._shared[key]
 
     def check_probes(self, probes) -> list:
         """The probes (mm) as floats, each checked against the space."""
@@ -165,7 +225,8 @@ class LoadedSpace:
         return next((n for n in notes if "scale-free" in n), notes[0])
 
 
-def load_space(space_path=None, bottom: str = "fixed") -> LoadedSpace:
+def load_space(space_path=None, bottom: str = "fixed", *, solve_on_demand: bool = True,
+               cache_dir=None, workers: int = 1) -> LoadedSpace:
     """Read a simulated space once, whatever its layout.
 
     Parameters
@@ -179,6 +240,13 @@ def load_space(space_path=None, bottom: str = "fixed") -> LoadedSpace:
         ``info`` says which (``source``, ``description``).
     bottom : str
         Bottom condition of the curves to use.
+    solve_on_demand : bool
+        On the scale-free space, solve the neo-Hookean rays of an aperture or of
+        layer thicknesses the space lacks (16 FE rays a probe, cached in
+        ``cache_dir``; :class:`skinsuction.space.OnDemandRays`). False refuses them.
+    cache_dir : path-like, optional
+    workers : int
+        Processes for those solves.
 
     Raises
     ------
@@ -208,7 +276,7 @@ def load_space(space_path=None, bottom: str = "fixed") -> LoadedSpace:
     skinsuction.errors.InputError: ...missing.parquet: simulated space not found ...
     """
     src = resolve_space(space_path)
-    spaces, space_meta, p_range = _read_space(src.path, bottom)
+    spaces, space_meta, p_range, rays = _read_space(src.path, bottom)
     sp = src.path
     sha_of = sp if sp.is_file() else sp / "neo_hookean.parquet"
     info = {"path": str(sp), "sha256": file_sha256(sha_of),
@@ -216,4 +284,7 @@ def load_space(space_path=None, bottom: str = "fixed") -> LoadedSpace:
             "git_commit": (space_meta.get("git") or {}).get("commit"),
             "mesh": space_meta.get("mesh") or (space_meta.get("ray_spec") or {}).get("mesh"),
             **src.info()}
-    return LoadedSpace(spaces, info, p_range, bottom)
+    on_demand = None
+    if rays is not None and solve_on_demand:
+        on_demand = OnDemandRays(rays.spec, cache_dir=cache_dir, workers=workers)
+    return LoadedSpace(spaces, info, p_range, bottom, rays, None, on_demand)

@@ -1,0 +1,124 @@
+"""Accuracy of the neo-Hookean space at any probe and layers, against direct FE runs.
+
+    python benchmarks/geometry_accuracy.py [--space-dir DIR] [--geometries 30]
+        [--per-geometry 4] [--seed 0] [--workers 2] [--cache DIR]
+
+Draws random geometries (the aperture uniform in 2-8 mm, t_d uniform in 0.5-2.5
+mm, t_h log-uniform in 0.5-10 mm), solves their neo-Hookean rays on demand (as
+`identify` and `diagnose` do, skinsuction.space.OnDemandRays), then at random
+points of each (X1h/X1d log-uniform over the ratio nodes, X1d log-uniform in
+0.005-0.15 MPa raised to the load reach, a protocol to 100, 300 or 500 mbar)
+compares the interpolated space with a direct FE run at every pressure, as
+benchmarks/scale_free_accuracy.py does for the precomputed probes. Prints the
+percentiles of the relative error overall and per aperture band. Asserts nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+_CTX = {}
+
+
+def _init(space_dir, cache):
+    from skinsuction.space import BASELINE, OnDemandRays, read_ray_spaces
+
+    base = read_ray_spaces(space_dir)[BASELINE]
+    _CTX.update(base=base, solver=OnDemandRays(base.spec, cache_dir=cache))
+
+
+def _run(job):
+    from skinsuction.diagnose._accuracy import AccuracyPoint, compare_point
+    from skinsuction.space import BASELINE, Geometry, spaces_at
+
+    (probe, t_d, t_h), points = job
+    t0 = time.process_time()
+    g = Geometry(t_d, t_h, given=("t_d", "t_h"))
+    spaces, notes = spaces_at({BASELINE: _CTX["base"]}, [probe], g, _CTX["solver"])
+    rays_cpu = time.process_time() - t0
+    out = []
+    for (x1d, ratio, p_max, p_step) in points:
+        pt = AccuracyPoint(BASELINE, probe, x1d, ratio, math.nan, p_max, p_step, t_d, t_h)
+        rec = compare_point(spaces[BASELINE], pt)
+        rec["rays_cpu_s"] = rays_cpu
+        out.append(rec)
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--space-dir", default="results/simulated_space/scale_free")
+    ap.add_argument("--geometries", type=int, default=30)
+    ap.add_argument("--per-geometry", type=int, default=4)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--cache", default="benchmarks/out/on_demand")
+    ap.add_argument("--out", default="benchmarks/out/geometry_accuracy.csv")
+    args = ap.parse_args(argv)
+
+    from skinsuction.diagnose._accuracy import PROTOCOLS
+    from skinsuction.space import BASELINE, read_ray_spaces
+
+    spec = read_ray_spaces(args.space_dir)[BASELINE].spec
+    rng = np.random.default_rng(args.seed)
+    lr = np.log10(spec.ratio_nodes)
+    jobs = []
+    for _ in range(args.geometries):
+        geo = (round(float(rng.uniform(2.0, 8.0)), 2), round(float(rng.uniform(0.5, 2.5)), 2),
+               round(float(10 ** rng.uniform(math.log10(0.5), 1.0)), 2))
+        pts = []
+        for _ in range(args.per_geometry):
+            p_max, p_step = PROTOCOLS[rng.integers(len(PROTOCOLS))]
+            lo = max(0.005, p_max / spec.load_max)
+            x1d = 10 ** rng.uniform(math.log10(lo), math.log10(max(lo * 1.0001, 0.15)))
+            pts.append((float(x1d), float(10 ** rng.uniform(lr[0], lr[-1])), p_max, p_step))
+        jobs.append((geo, pts))
+    t0 = time.perf_counter()
+    with ProcessPoolExecutor(args.workers, initializer=_init,
+                             initargs=(args.space_dir, args.cache)) as pool:
+        records = [r for rs in pool.map(_run, jobs) for r in rs]
+    wall = time.perf_counter() - t0
+    rows = []
+    for r in records:
+        for p, fe, sp in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"]):
+            rows.append({k: r[k] for k in ("probe_mm", "t_d", "t_h", "x1d", "ratio", "p_max")}
+                        | {"pressure_mbar": p, "fe_mm": fe, "space_mm": sp})
+    per_p = pd.DataFrame(rows)
+    per_p["relative_error"] = (per_p["space_mm"] - per_p["fe_mm"]).abs() / per_p["fe_mm"].abs()
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    per_p.to_csv(out, index=False)
+    pts = pd.DataFrame([{k: v for k, v in r.items() if not isinstance(v, list)}
+                        for r in records])
+    pts.to_csv(out.with_name(out.stem + "_points.csv"), index=False)
+    print(f"{args.geometries} geometries x {args.per_geometry} points ({args.seed=}), "
+          f"{len(per_p)} pressures compared; {wall:.0f} s wall on {args.workers} workers; "
+          f"rays on demand {pts.groupby(['probe_mm', 't_d', 't_h'])['rays_cpu_s'].first().median():.1f}"
+          " CPU-s per geometry (median)")
+    print(f"pressures beyond the space's coverage where FE has a value: "
+          f"{int(pts['n_fe_only'].sum())}")
+
+    def stats(v):
+        v = np.asarray(v, float)
+        return (f"median {100 * np.median(v):.3f} %, 95th percentile "
+                f"{100 * np.percentile(v, 95):.3f} %, max {100 * v.max():.3f} %")
+
+    print(f"[all] {len(per_p)} pressures: {stats(per_p['relative_error'])}")
+    bands = pd.cut(per_p["probe_mm"], [2, 3, 5, 7, 8.0001], right=False,
+                   labels=["2-3 mm", "3-5 mm", "5-7 mm", "7-8 mm"])
+    for band, g in per_p.groupby(bands, observed=True):
+        print(f"[{band}] {len(g)} pressures: {stats(g['relative_error'])}")
+    print(f"written: {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,315 @@
+"""Every probe and the subject's own layers: the spaces of one measurement.
+
+The scale-free space holds rays of the Cutometer probes (2, 4, 6 and 8 mm) for
+the paper's layers (dermis and hypodermis 1 mm each).  A measurement with another
+aperture, or with its own layer thicknesses (ultrasound, OCT), gets its
+neo-Hookean rays solved on demand at exactly that geometry, with the space's ray
+specification (:class:`OnDemandRays`), and cached on disk: 16 FE rays per probe,
+about 10-20 s of CPU, once per geometry.  Interpolating a precomputed grid over
+the geometry instead was measured and rejected: under a soft hypodermis the
+deflection changes fourfold between t_d/a = 0.2 and 0.55, and cubic
+interpolation on nodes 1.3 apart in t_d/a still missed direct runs by up to 1.1 %
+(median 0.3 %), where the space must stay within 0.2 % (docs/geometry.md).
+
+Geometric similarity, M(s a, s t_d, s t_h) = s M(a, t_d, t_h) (tested to
+round-off in tests/test_model.py), makes a cached set of rays serve every
+geometrically similar measurement: the cache key is the dimensionless geometry
+(t_d/a, t_h/a), the rays are scaled by the aperture.
+
+The causes keep their precomputed rays: :func:`spaces_at` adds a cause's effect
+on log M (its rays over the neutral ones, interpolated across the probes in log
+of the aperture) to the measurement's neo-Hookean rays.  At the probes and
+layers the cause was simulated for, that is its own rays; elsewhere it is an
+approximation, and the notes say so.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import math
+import os
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from skinsuction.measured._geometry import DEFAULT_LAYERS_MM, Geometry
+
+from ._causes import BASELINE
+
+log = logging.getLogger(__name__)
+
+__all__ = ["Geometry", "GeometryOutsideSpace", "OnDemandRays", "spaces_at",
+           "DEFAULT_LAYERS_MM", "default_cache_dir"]
+
+#: Thicknesses are rounded to this (mm) before rays are solved for them: a
+#: measured thickness is not known better, and rounded geometries share a cache.
+THICKNESS_RESOLUTION_MM = 0.01
+
+
+class GeometryOutsideSpace(ValueError):
+    """A probe and layers the spaces do not cover (and no on-demand solver is allowed)."""
+
+
+def default_cache_dir() -> Path:
+    """Where on-demand rays are kept: ``$SKINSUCTION_CACHE`` or ``~/.cache/skinsuction``."""
+    env = os.environ.get("SKINSUCTION_CACHE")
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "skinsuction"
+
+
+def _fe_code_hash() -> str:
+    """Hash of the FE model's and the ray solve's source: a change invalidates the cache."""
+    root = Path(__file__).resolve().parents[1]
+    files = sorted((root / "model").glob("*.py")) + [
+        root / "space" / n for n in ("_solve.py", "_ray_solve.py", "_rays.py", "_storage.py")]
+    h = hashlib.sha256()
+    for f in files:
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _round_mm(x: float) -> float:
+    return round(round(float(x) / THICKNESS_RESOLUTION_MM) * THICKNESS_RESOLUTION_MM, 6)
+
+
+class OnDemandRays:
+    """Neo-Hookean rays of one probe at one geometry, solved when first needed, cached.
+
+    Parameters
+    ----------
+    spec : RaySpec
+        The ray specification of the space they extend (ratio nodes, loads, mesh,
+        fallbacks): the rays are those the workflow would have run.
+    cache_dir : path-like, optional
+        Default :func:`default_cache_dir`; a subfolder per specification and FE code.
+    workers : int
+        Processes that solve the rays of one geometry.
+    """
+
+    def __init__(self, spec, cache_dir=None, workers: int = 1):
+        import json
+
+        self.spec = spec
+        self.workers = max(1, int(workers))
+        key = hashlib.sha256(json.dumps(spec.to_dict(), sort_keys=True).encode()
+                             + _fe_code_hash().encode()).hexdigest()[:16]
+        self.dir = Path(cache_dir or default_cache_dir()) / "rays" / key
+        self.solved = 0  # geometries solved by this object (not read from the cache)
+
+    def _ray_ids(self, probe_mm, t_d, t_h):
+        from ._rays import ray_id
+        from ._storage import round_sig
+
+        x1d = self.spec.x1d_ref
+        return [ray_id({"probe_mm": probe_mm, "bottom": self.spec.bottom,
+                        "x1d": round_sig(x1d), "x1h": round_sig(r * x1d),
+                        "t_d": t_d, "t_h": t_h})
+                for r in self.spec.ratio_nodes]
+
+    def rays(self, probe_mm: float, t_d: float, t_h: float):
+        """``(rays (n_r, 1, n_p) in mm, info)`` of one probe at one geometry.
+
+        The rays are solved for the reference aperture of the dimensionless
+        geometry (2 mm, thicknesses ``t/a``) and scaled by ``a`` (geometric
+        similarity), so similar measurements share them.
+        """
+        from ._storage import _read_parquet, round_sig
+
+        a = probe_mm / 2
+        ref_td, ref_th = round_sig(t_d / a, 6), round_sig(t_h / a, 6)
+        path = self.dir / f"td{ref_td:g}_th{ref_th:g}.parquet"
+        if not path.exists():
+            self._solve(path, ref_td, ref_th)
+        frame, meta = _read_parquet(path)
+        p = np.asarray(self.spec.pressures_mbar)
+        out = np.full((len(self.spec.ratio_nodes), 1, p.size), np.nan)
+        ids = self._ray_ids(2.0, ref_td, ref_th)
+        for i, rid in enumerate(ids):
+            g = frame[frame["ray_id"] == rid]
+            if len(g) != p.size:
+                raise RuntimeError(f"{path}: ray {rid} is missing or incomplete; delete the "
+                                   "file to solve it again")
+            out[i, 0] = g["deflection_mm"].to_numpy(float) * a
+        stopped = sum(1 for r in (meta.get("rays") or {}).values() if not r.get("converged"))
+        return out, {"cache": str(path), "rays": len(ids), "stopped_early": stopped}
+
+    def _solve(self, path: Path, td: float, th: float):
+        from ._ray_solve import compute_bundle
+
+        ids = self._ray_ids(2.0, td, th)
+        log.info("solving %d neo-Hookean rays on demand for t_d/a = %g, t_h/a = %g -> %s",
+                 len(ids), td, th, path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        args = (self.spec.pressures_mbar, self.spec.mesh, list(self.spec.fallback))
+        if self.workers > 1:
+            from concurrent.futures import ProcessPoolExecutor
+
+            parts = [ids[i::self.workers] for i in range(self.workers)]
+            tmp = [path.with_name(f"{path.stem}.part{i}.parquet") for i in range(len(parts))]
+            with ProcessPoolExecutor(self.workers) as pool:
+                list(pool.map(compute_bundle, parts, tmp, *[[a] * len(parts) for a in args]))
+            _merge_bundles(tmp, path)
+        else:
+            compute_bundle(ids, path, *args)
+        self.solved += 1
+
+
+def _merge_bundles(parts, path):
+    import pandas as pd
+
+    from ._storage import _read_parquet, _write_parquet
+
+    frames, meta = [], {}
+    for p in parts:
+        f, m = _read_parquet(p)
+        frames.append(f)
+        rays = {**meta.get("rays", {}), **m.get("rays", {})}
+        meta = {**m, "rays": rays}
+    _write_parquet(pd.concat(frames, ignore_index=True), path, meta)
+    for p in parts:
+        Path(p).unlink(missing_ok=True)
+
+
+def _cause_effect(space, probe_mm: float):
+    """log M_c - log M_neutral of a cause's rays at one aperture, (n_r, n_c, n_p - 1).
+
+    Interpolated across the cause's probes (cubic Lagrange in log10 of the
+    aperture); exactly 0 at the neutral coordinate; None outside its probes.
+    """
+    from ._interpolate import LagrangeAxis
+
+    probes = np.asarray(space.probes_mm, dtype=float)
+    j0 = int(np.argmin(np.abs(np.asarray(space.coordinates) - space.cause.neutral)))
+    effect = []
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for p in probes:
+            g = np.log(space.rays(p)[..., 1:])
+            g[~np.isfinite(g)] = np.nan
+            effect.append(g - g[:, j0:j0 + 1, :])
+    effect = np.stack(effect)
+    hit = np.flatnonzero(np.isclose(probes, probe_mm, rtol=0, atol=1e-6))
+    if hit.size:
+        return effect[hit[0]]
+    if probes.size < 2:
+        return None
+    axis = LagrangeAxis(np.log10(probes))
+    start, w = axis.weights([math.log10(probe_mm)])
+    if np.isnan(w[0, 0]):
+        return None
+    block = effect[int(start[0]):int(start[0]) + axis.m]
+    block = np.where((w[0] == 0.0)[:, None, None, None], 0.0, block)
+    return np.tensordot(w[0], block, axes=(0, 0))
+
+
+def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays | None = None):
+    """The ray spaces of one measurement: every model at its probes and layers.
+
+    Parameters
+    ----------
+    spaces : dict name -> RaySpace
+        As read by :func:`skinsuction.space.read_ray_spaces`.
+    probes : iterable of float
+        Apertures (mm) of the measurement.
+    geometry : Geometry
+    on_demand : OnDemandRays, optional
+        Solves the neo-Hookean rays of a probe or geometry the space lacks; without
+        it such a measurement raises :class:`GeometryOutsideSpace`.
+
+    Returns
+    -------
+    (dict name -> RaySpace, list of str)
+        The spaces (the neo-Hookean one at the measurement's geometry, each cause
+        as its effect on it), and notes for the report: a cause left out (its
+        thickness is given, or it is not simulated for these probes), rays solved
+        on demand, a cause's effect carried over from the layers or probes it was
+        simulated for.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from skinsuction.space import RaySpace, RaySpec
+    >>> spec = RaySpec(probes_mm=[2, 6], ratio_nodes=[0.01, 0.1], load_max=100.0,
+    ...                load_steps=4)
+    >>> rays = {p: np.linspace(0, 1, 5)[None, None, :] * np.ones((2, 1, 1)) for p in (2., 6.)}
+    >>> base = RaySpace(None, spec, np.array([np.nan]), rays)
+    >>> out, notes = spaces_at({"neo_hookean": base}, [6.0], Geometry())
+    >>> out["neo_hookean"].probes_mm, notes
+    ((6.0,), [])
+    >>> spaces_at({"neo_hookean": base}, [4.0], Geometry())  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    skinsuction.space._geometry.GeometryOutsideSpace: no neo-Hookean rays of the 4 mm probe for ...
+    """
+    from ._rays import RaySpace
+
+    probes = [float(p) for p in probes]
+    base = spaces[BASELINE]
+    notes = []
+    t_d, t_h = geometry.t_d, geometry.t_h
+    if not geometry.is_default:
+        t_d, t_h = _round_mm(t_d), _round_mm(t_h)
+        if abs(t_d - geometry.t_d) > 1e-9 or abs(t_h - geometry.t_h) > 1e-9:
+            notes.append(f"thicknesses rounded to {THICKNESS_RESOLUTION_MM:g} mm for the FE "
+                         f"rays: t_d = {t_d:g}, t_h = {t_h:g} mm")
+    default = geometry.is_default
+    rays, solved = {}, []
+    for p in probes:
+        if default and base.has_probe(p):
+            rays[p] = base.rays(p)
+            continue
+        if on_demand is None:
+            raise GeometryOutsideSpace(
+                f"no neo-Hookean rays of the {p:g} mm probe for t_d = {t_d:g}, t_h = {t_h:g} mm "
+                f"in the space (it has {', '.join(f'{q:g}' for q in base.probes_mm)} mm with "
+                "1 mm layers); allow solving them on demand")
+        rays[p], info = on_demand.rays(p, t_d, t_h)
+        solved.append((p, info))
+    for p, info in solved:
+        notes.append(f"neo-Hookean rays of the {p:g} mm probe at t_d = {t_d:g}, t_h = {t_h:g} mm"
+                     f" solved on demand ({info['rays']} FE rays, {info['stopped_early']} "
+                     f"stopped early; cached in {info['cache']})")
+    spec = replace(base.spec, probes_mm=tuple(probes))
+    meta = {**base.metadata, "geometry": geometry.to_dict()}
+    out = {BASELINE: RaySpace(None, spec, np.array([math.nan]), rays, meta)}
+    for name, space in spaces.items():
+        if name == BASELINE:
+            continue
+        cause = space.cause
+        if cause.geometric and cause.keyword in geometry.given:
+            notes.append(f"{name}: not a free cause, the {cause.symbol} is given "
+                         f"({getattr(geometry, cause.keyword):g} mm)")
+            continue
+        if default and all(space.has_probe(p) for p in probes):
+            out[name] = RaySpace(cause, spec, space.coordinates,
+                                 {p: space.rays(p) for p in probes}, space.metadata)
+            continue
+        arrays = {}
+        for p in probes:
+            effect = _cause_effect(space, p)
+            if effect is None:
+                break
+            with np.errstate(divide="ignore", invalid="ignore"):
+                g = np.log(np.where(rays[p][..., 1:] > 0, rays[p][..., 1:], np.nan)) + effect
+            full = np.zeros(g.shape[:-1] + (g.shape[-1] + 1,))
+            full[..., 1:] = np.exp(g)
+            arrays[p] = full
+        if len(arrays) < len(probes):
+            notes.append(f"{name}: simulated for the {', '.join(f'{q:g}' for q in space.probes_mm)}"
+                         f" mm probes only, not {', '.join(f'{q:g}' for q in probes)} mm")
+            continue
+        where = []
+        if not default:
+            where.append(f"{DEFAULT_LAYERS_MM[0]:g} mm + {DEFAULT_LAYERS_MM[1]:g} mm layers")
+        if any(not space.has_probe(p) for p in probes):
+            where.append(f"the {', '.join(f'{q:g}' for q in space.probes_mm)} mm probes")
+        notes.append(f"{name}: its effect on the deflection was simulated for "
+                     f"{' and '.join(where)} and is carried over to this measurement "
+                     "(an approximation)")
+        out[name] = RaySpace(cause, spec, space.coordinates, arrays,
+                             {**space.metadata, "geometry": geometry.to_dict()})
+    return out, notes

@@ -1,0 +1,189 @@
+"""Every probe and the subject's own layers: geometry input, spaces of a measurement,
+rays solved on demand (checked against direct FE runs and geometric similarity)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from skinsuction.measured import MeasuredDataError, geometry_of, load_measured, load_table
+from skinsuction.model import simulate
+from skinsuction.space import (
+    BASELINE,
+    Geometry,
+    GeometryOutsideSpace,
+    OnDemandRays,
+    RaySpace,
+    RaySpec,
+    default_registry,
+    spaces_at,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+CSV = "probe_mm,pressure_mbar,deflection_mm\n6,0,0\n6,50,0.4\n6,100,0.7\n"
+
+
+# ------------------------------------------------------------------ geometry input
+def _file(tmp_path, header):
+    path = tmp_path / "m.csv"
+    path.write_text(header + CSV, encoding="utf-8")
+    return path
+
+
+def test_header_lines_give_the_layers_and_their_sd(tmp_path):
+    path = _file(tmp_path, "# subject: S1\n# dermis_thickness_mm: 1.3\n"
+                           "# dermis_thickness_sd_mm: 0.1\n# hypodermis_thickness_mm: 3\n")
+    g, warnings = geometry_of(load_measured(path))
+    assert (g.t_d, g.t_h, g.given, g.sd) == (1.3, 3.0, ("t_d", "t_h"), {"t_d": 0.1})
+    assert warnings == [] and g.assumptions() == []
+
+
+def test_layers_not_given_are_the_papers_and_stated_as_assumptions(tmp_path):
+    g, _ = geometry_of(load_measured(_file(tmp_path, "# dermis_thickness_mm: 1.3\n")))
+    assert (g.t_d, g.t_h, g.given) == (1.3, 1.0, ("t_d",))
+    (text,) = g.assumptions()
+    assert "hypodermis thickness assumed 1 mm" in text
+    g, _ = geometry_of(load_measured(_file(tmp_path, "")))
+    assert g.is_default and len(g.assumptions()) == 2
+
+
+def test_options_override_the_header_and_say_so(tmp_path):
+    data = load_measured(_file(tmp_path, "# dermis_thickness_mm: 1.3\n"))
+    g, warnings = geometry_of(data, dermis_thickness_mm=1.1, hypodermis_thickness_mm=4.0)
+    assert (g.t_d, g.t_h, g.given) == (1.1, 4.0, ("t_d", "t_h"))
+    assert len(warnings) == 1 and "overrides the file's dermis_thickness_mm: 1.3" in warnings[0]
+
+
+@pytest.mark.parametrize("line, key, reason", [
+    ("# dermis_thickness_mm: 1300", "dermis_thickness_mm", "looks like µm, not mm"),
+    ("# dermis_thickness_mm: -1", "dermis_thickness_mm", "must be positive"),
+    ("# dermis_thickness_mm: thick", "dermis_thickness_mm", "is not a number"),
+    ("# dermis_thickness_mm: 12", "dermis_thickness_mm", "not a plausible thickness"),
+    ("# hypodermis_thickness_mm: 0", "hypodermis_thickness_mm", "must be positive"),
+    ("# hypodermis_thickness_sd_mm: 0.2", "hypodermis_thickness_sd_mm", "without"),
+])
+def test_bad_layers_are_a_located_one_line_error(tmp_path, line, key, reason):
+    path = _file(tmp_path, f"# subject: S1\n{line}\n")
+    with pytest.raises(MeasuredDataError) as err:
+        load_measured(path)
+    msg = str(err.value)
+    assert err.value.line == 2 and err.value.column == key and reason in msg
+    assert "\n" not in msg and str(path) in msg
+
+
+def test_an_sd_as_large_as_its_thickness_is_refused(tmp_path):
+    path = _file(tmp_path, "# dermis_thickness_mm: 1.0\n# dermis_thickness_sd_mm: 1.0\n")
+    with pytest.raises(MeasuredDataError, match="line 2.*must lie in 0 <= sd <"):
+        load_measured(path)
+
+
+def test_study_columns_give_each_measurement_its_layers(tmp_path):
+    path = tmp_path / "study.csv"
+    path.write_text("subject,dermis_thickness_mm,probe_mm,pressure_mbar,deflection_mm\n"
+                    "S1,1.2,6,0,0\nS1,1.2,6,50,0.4\nS1,1.2,6,100,0.7\n"
+                    "S2,1200,6,0,0\nS2,1200,6,100,0.8\n")
+    s1, s2 = load_table(path)
+    assert s1.error is None and geometry_of(s1.data)[0].t_d == 1.2
+    assert s2.data is None and "line 5" in s2.error and "looks like µm" in s2.error
+
+
+# --------------------------------------------------------- spaces of a measurement
+def _toy_spaces():
+    spec = RaySpec([2, 4, 6, 8], [0.01, 0.1], load_max=100.0, load_steps=4)
+    reg = default_registry()
+    q = np.linspace(0.0, 1.0, 5)
+    base = {p: (p / 2) * q[None, None, :] * np.array([[[1.0]], [[0.5]]]) for p in spec.probes_mm}
+    spaces = {BASELINE: RaySpace(None, spec, np.array([np.nan]), base)}
+    for name in ("strain_stiffening", "dermis_thickness"):
+        cause = reg[name]
+        c = np.asarray(cause.nodes)
+        # a cause that scales the deflection by a smooth factor of its coordinate and the probe
+        arrays = {p: base[p] * np.exp(-0.1 * np.log1p(np.abs(c - cause.neutral)) * p)[None, :, None]
+                  for p in spec.probes_mm}
+        spaces[name] = RaySpace(cause, spec, c, arrays)
+    return spaces
+
+
+def test_at_the_simulated_probes_and_layers_every_space_is_its_own_rays():
+    spaces = _toy_spaces()
+    out, notes = spaces_at(spaces, [4.0, 8.0], Geometry())
+    assert notes == []
+    for name, s in spaces.items():
+        for p in (4.0, 8.0):
+            assert np.array_equal(out[name].rays(p), s.rays(p))
+
+
+def test_a_cause_carried_to_other_layers_is_its_effect_on_their_rays():
+    spaces = _toy_spaces()
+
+    class Solver:  # stands in for the FE: the 1 mm rays times 1.7
+        def rays(self, p, t_d, t_h):
+            return spaces[BASELINE].rays(p) * 1.7, {"rays": 2, "stopped_early": 0, "cache": "-"}
+
+    g = Geometry(1.3, 1.0, given=("t_d",))
+    out, notes = spaces_at(spaces, [6.0], g, Solver())
+    assert "dermis_thickness" not in out  # given: not a free cause
+    assert any("not a free cause" in n for n in notes)
+    assert any("solved on demand" in n for n in notes)
+    assert any("strain_stiffening" in n and "approximation" in n for n in notes)
+    ratio = out["strain_stiffening"].rays(6.0)[..., 1:] / spaces["strain_stiffening"].rays(6.0)[..., 1:]
+    assert np.allclose(ratio, 1.7, rtol=1e-12)
+
+
+def test_a_cause_at_an_aperture_between_its_probes_is_interpolated_in_log_aperture():
+    spaces = _toy_spaces()
+
+    class Solver:
+        def rays(self, p, t_d, t_h):
+            return spaces[BASELINE].rays(4.0) * (p / 4), {"rays": 2, "stopped_early": 0,
+                                                          "cache": "-"}
+
+    out, notes = spaces_at(spaces, [5.0], Geometry(), Solver())
+    eff = np.log(out["strain_stiffening"].rays(5.0)[..., 1:] / out[BASELINE].rays(5.0)[..., 1:])
+    # the toy effect is linear in the aperture; cubic Lagrange in log(aperture) on
+    # 2, 4, 6, 8 mm reproduces it to the interpolation error of a smooth function
+    c = np.asarray(spaces["strain_stiffening"].coordinates)
+    exact = -0.1 * np.log1p(np.abs(c))[None, :, None] * 5.0
+    assert np.allclose(eff, np.broadcast_to(exact, eff.shape), rtol=1e-3, atol=1e-12)
+    assert any("carried over" in n for n in notes)
+
+
+def test_without_a_solver_a_missing_probe_or_layer_is_refused_by_name():
+    spaces = _toy_spaces()
+    with pytest.raises(GeometryOutsideSpace, match="5 mm probe"):
+        spaces_at(spaces, [5.0], Geometry())
+    with pytest.raises(GeometryOutsideSpace, match="t_d = 1.3"):
+        spaces_at(spaces, [6.0], Geometry(1.3, 1.0, given=("t_d",)))
+
+
+# ------------------------------------------------------------ rays solved on demand
+SPEC = RaySpec([2, 6], [0.02, 0.2], load_max=10000, load_steps=5, x1d_ref=0.01,
+               mesh={"refinement": 0.5})
+
+
+@pytest.fixture(scope="module")
+def solver(tmp_path_factory):
+    return OnDemandRays(SPEC, cache_dir=tmp_path_factory.mktemp("cache"))
+
+
+def test_rays_on_demand_are_the_fe_model_at_that_probe_and_layers(solver):
+    rays, info = solver.rays(4.0, 1.5, 3.0)
+    assert rays.shape == (2, 1, len(SPEC.pressures_mbar)) and info["rays"] == 2
+    p = np.asarray(SPEC.pressures_mbar)
+    for i, r in enumerate(SPEC.ratio_nodes):
+        c = simulate(0.01, 0.01 * r, t_d=1.5, t_h=3.0, probe_mm=4.0, pressures_mbar=p,
+                     mesh={"refinement": 0.5})
+        m = np.asarray(c.deflection_mm)
+        # solved for 2 mm at half the thicknesses and scaled by 2: geometric similarity
+        assert np.allclose(rays[i, 0, :m.size], m, rtol=1e-9, atol=1e-12)
+
+
+def test_similar_geometries_share_the_cached_rays(solver):
+    solved = solver.solved
+    a, _ = solver.rays(4.0, 1.5, 3.0)
+    b, info = solver.rays(8.0, 3.0, 6.0)  # the same t/a: read from the cache, scaled
+    assert solver.solved == solved and Path(info["cache"]).exists()
+    assert np.allclose(b, 2 * a, rtol=1e-15)
