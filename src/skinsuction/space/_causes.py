@@ -192,7 +192,7 @@ DEFAULT_CAUSES = {
     ),
     "hypodermis_thickness": dict(
         keyword="t_h", symbol="t_h", unit="mm", modulus=False, neutral=1.0, scale="log",
-        nodes=[0.5, 0.75, 1.0, 1.5, 2.5, 5.0, 10.0],
+        nodes=[0.5, 0.65, 0.85, 1.0, 1.3, 1.7, 2.2, 3.0, 4.5, 7.0, 10.0],
         hypothesis="the hypodermis is not 1 mm thick (on the forearm often several mm): "
                    "the probe feels the bone less, or more, than the model assumes",
         description="thickness of the hypodermis over a fixed bottom (mm)",
