@@ -40,17 +40,18 @@ def draw(seed):
     return x1d, x1d * ratio, rng.uniform(*RANGES["noise_um"])
 
 
-def clean_curves(seeds, cache: Path, mesh, fallback):
-    """{seed: {probe: FE curve}} from the cache, computing the missing draws."""
+def clean_curves(seeds, cache: Path, mesh, fallback, probes=(2.0, 6.0)):
+    """{seed: {probe: FE curve}} from the cache, computing the missing draws and probes."""
     from skinsuction.space import solve_with_fallbacks
 
     have = json.loads(cache.read_text()) if cache.exists() else {}
-    todo = [s for s in seeds if str(s) not in have]
+    todo = [s for s in seeds
+            if any(f"{p:g}" not in have.get(str(s), {}) for p in probes)]
     t0 = time.perf_counter()
     for i, s in enumerate(todo):
         x1d, x1h, _ = draw(s)
-        curves = {}
-        for probe in (2.0, 6.0):
+        curves = dict(have.get(str(s), {}))
+        for probe in (p for p in probes if f"{p:g}" not in curves):
             c, _, _ = solve_with_fallbacks(dict(x1d=x1d, x1h=x1h, probe_mm=probe,
                                                 bottom="fixed"), PRESSURES, mesh, fallback,
                                            label=f"draw {s}", splice=True)

@@ -13,6 +13,7 @@ profile the intervals use is not fitted to the draws that measure their
 coverage.
 
     python benchmarks/space_error_profile.py [--space DIR] [--first-seed 7000] [--draws 120]
+        [--probes 2 4 6 8]
 """
 
 from __future__ import annotations
@@ -30,13 +31,13 @@ import interval_coverage as ic  # noqa: E402  (the draws and the FE cache)
 EDGES = [0, 1000, 2000, 4000, 7000, 10000, 14000, 20000]
 
 
-def errors(space, cache: Path, seeds) -> pd.DataFrame:
+def errors(space, cache: Path, seeds, probes=(2.0, 6.0)) -> pd.DataFrame:
     spec = space.probe(6.0).space.spec
-    clean = ic.clean_curves(seeds, cache, dict(spec.mesh or {}), spec.fallback)
+    clean = ic.clean_curves(seeds, cache, dict(spec.mesh or {}), spec.fallback, probes)
     rows = []
     for s in seeds:
         x1d, x1h, _ = ic.draw(s)
-        for probe in (2.0, 6.0):
+        for probe in probes:
             fe = clean[s][probe]
             sl = space.probe(probe)
             sp = sl.interpolant_at(ic.PRESSURES)(sl.from_moduli([[x1d, x1h]]))[0]
@@ -54,9 +55,10 @@ def main(argv=None):
     ap.add_argument("--cache", default="results/benchmarks/space_error_profile_fe.json")
     ap.add_argument("--first-seed", type=int, default=7000)
     ap.add_argument("--draws", type=int, default=120)
+    ap.add_argument("--probes", type=float, nargs="+", default=[2.0, 4.0, 6.0, 8.0])
     args = ap.parse_args(argv)
     df = errors(load_space(args.space), Path(args.cache),
-                list(range(args.first_seed, args.first_seed + args.draws)))
+                list(range(args.first_seed, args.first_seed + args.draws)), args.probes)
     df["bin"] = pd.cut(df["q"], EDGES)
     g = df.groupby(["probe", "bin"], observed=False)
     table = pd.DataFrame({
@@ -68,7 +70,7 @@ def main(argv=None):
     print(table.round(4).to_string())
     centres = [0.5 * (a + b) for a, b in zip(EDGES[:-1], EDGES[1:])]
     print("\nSPACE_ERROR_LOADS =", tuple([0.0, *centres, float(EDGES[-1])]))
-    for probe in (6.0, 2.0):
+    for probe in sorted(args.probes, reverse=True):
         rms = [float(table.loc[(probe, b), "rms_rel_pct"]) / 100 for b in table.loc[probe].index]
         print(f"    {probe}: {tuple(float(f'{r:.2g}') for r in [rms[0], *rms, rms[-1]])},")
     return table

@@ -506,8 +506,12 @@ MODEL_ERROR_MM = 0.3e-3
 #: Switch of the correlated term (a benchmark compares with and without).
 SPACE_ERROR_CORRELATED = True
 SPACE_ERROR_LOADS = (0.0, 500.0, 1500.0, 3000.0, 5500.0, 8500.0, 12000.0, 17000.0, 20000.0)
+#: The 4 and 8 mm profiles were measured on the four-probe space (25 November 2026);
+#: another aperture takes them linearly in log of the aperture (:func:`space_error_rms`).
 SPACE_ERROR_RMS = {
+    8.0: (0.00046, 0.00046, 0.00081, 0.0014, 0.0024, 0.0026, 0.0037, 0.0064, 0.0064),
     6.0: (0.0003, 0.0003, 0.00033, 0.00049, 0.001, 0.0012, 0.0016, 0.002, 0.002),
+    4.0: (0.00019, 0.00019, 0.00023, 0.00026, 0.00035, 0.0004, 0.00056, 0.0008, 0.0008),
     2.0: (3.4e-05, 3.4e-05, 3.4e-05, 3e-05, 3.2e-05, 4.5e-05, 3.4e-05, 3.7e-05, 3.7e-05),
 }
 
@@ -515,6 +519,30 @@ SPACE_ERROR_RMS = {
 def _point_sd(sigma_mm, measured_mm, model_error):
     floor = MODEL_ERROR_MM if model_error else 0.0
     return np.sqrt(sigma_mm ** 2 + (model_error * np.abs(measured_mm)) ** 2 + floor ** 2)
+
+
+def space_error_rms(probe_mm):
+    """The relative rms of the space's error per load (:data:`SPACE_ERROR_LOADS`) of a
+    probe: measured at the probes of :data:`SPACE_ERROR_RMS`, linear in log of the
+    aperture between them, the nearest one beyond (None without a table).
+
+    >>> space_error_rms(6.0) == SPACE_ERROR_RMS[6.0]
+    True
+    >>> bool(np.all(np.asarray(space_error_rms(5.0)) > 0))
+    True
+    """
+    table = {float(k): np.asarray(v, dtype=float) for k, v in SPACE_ERROR_RMS.items()}
+    if not table:
+        return None
+    p = float(probe_mm)
+    if p in table:
+        return SPACE_ERROR_RMS[p]
+    probes = np.array(sorted(table))
+    x = np.clip(math.log(p), math.log(probes[0]), math.log(probes[-1]))
+    i = int(np.clip(np.searchsorted(np.log(probes), x) - 1, 0, probes.size - 2))
+    lo, hi = probes[i], probes[min(i + 1, probes.size - 1)]
+    w = 0.0 if hi == lo else (x - math.log(lo)) / (math.log(hi) - math.log(lo))
+    return tuple(float(v) for v in (1 - w) * table[lo] + w * table[hi])
 
 
 def space_error_direction(probe_mm, pressure_mbar, measured_mm, x1d_mpa, sd):
@@ -526,7 +554,7 @@ def space_error_direction(probe_mm, pressure_mbar, measured_mm, x1d_mpa, sd):
     ``gamma = 1 - 1 / sqrt(1 + |v / sd|^2)``, whose squared norm is the chi2 of
     that covariance (Sherman-Morrison).
     """
-    rms = SPACE_ERROR_RMS.get(float(probe_mm))
+    rms = space_error_rms(probe_mm)
     if rms is None:
         return None, 0.0
     q = np.asarray(pressure_mbar, dtype=float) / float(x1d_mpa)
