@@ -40,7 +40,6 @@ import datetime as _dt
 import json
 import logging
 import math
-import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -489,6 +488,27 @@ def check_shipped_space(built_dir, out_csv, spec, causes: dict, shipped_dir=SHIP
 
 
 # ------------------------------------------------------------------- shipping
+def _write_compact(src, dest) -> None:
+    """Copy a space file without each ray's mesh settings in its solver record.
+
+    They repeat the ray specification's mesh (or, for a ray a fallback carried, the
+    fallback of its ``mesh_fallback`` index) on every ray: a third of the file, which
+    the package data need not carry.  The rays and everything else are copied as
+    they are.
+    """
+    import pyarrow.parquet as pq
+
+    from ._storage import METADATA_KEY
+
+    table = pq.read_table(src)
+    schema_meta = dict(table.schema.metadata or {})
+    meta = json.loads(schema_meta.get(METADATA_KEY, b"{}"))
+    for info in (meta.get("rays") or {}).values():
+        (info.get("curve_info") or {}).pop("mesh", None)
+    schema_meta[METADATA_KEY] = json.dumps(meta, sort_keys=True).encode()
+    pq.write_table(table.replace_schema_metadata(schema_meta), dest)
+
+
 def ship_space(built_dir, dest=SHIPPED_SPACE_DIR, *, config_file: str | None = None,
                build_command: str | None = None, ship_command: str | None = None,
                repo=None) -> dict:
@@ -527,7 +547,7 @@ def ship_space(built_dir, dest=SHIPPED_SPACE_DIR, *, config_file: str | None = N
     dest.mkdir(parents=True, exist_ok=True)
     for name in names:
         with atomic_output(dest / name) as tmp:
-            shutil.copyfile(built_dir / name, tmp)
+            _write_compact(built_dir / name, tmp)
     for stale in dest.glob("*.parquet"):
         if stale.name not in names:
             stale.unlink()
