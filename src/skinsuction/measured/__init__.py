@@ -69,6 +69,12 @@ Unit and plausibility rules, per curve (a Cutometer applies at most about
   pressure (noise makes only small falls; a small 2 mm curve of stiff skin with 5 µm
   of noise falls by 20-25 µm, a smooth falling curve has little noise).
 
+Time curves (Cutometer mode 1 and mode 2, columns ``probe_mm, time_s, pressure_mbar,
+deflection_mm``) are read by :func:`load_time_curves`, which finds the phases of the
+suction, the deflection's resolution and the noise; :func:`r_parameters` gives the
+standard R0-R9 of a mode-1 curve (:mod:`skinsuction.measured._timecurve`,
+:mod:`skinsuction.measured._rparams`, ``docs/time_curves.md``).
+
 Sizes: at most 2 000 points per curve, 2 000 000 lines and 256 MB per file, so
 that a wrong file fails fast instead of filling the memory.
 
@@ -101,6 +107,18 @@ from ._checks import (
 )
 from ._geometry import DEFAULT_LAYERS_MM, GEOMETRY_KEYS, Geometry, check_geometry_metadata, geometry_of
 from ._load import StudyEntry, load_measured, load_table
+from ._rparams import R_COLUMNS, RAMP_COLUMNS, r_parameters, ramp_parameters
+from ._timecurve import (
+    DEVICE_MAX_MBAR,
+    MIN_SAMPLES,
+    TIME_OPTIONAL_COLUMNS,
+    TIME_REQUIRED_COLUMNS,
+    Cycle,
+    MeasuredTimeData,
+    TimeCurve,
+    is_time_curve_file,
+    load_time_curves,
+)
 from ._types import (
     MAX_FILE_BYTES,
     MAX_POINTS_PER_CURVE,
@@ -113,7 +131,8 @@ from ._types import (
 )
 
 # the public classes are documented (and shown in tracebacks) under this package
-for _cls in (MeasuredCurve, MeasuredData, MeasuredDataError, StudyEntry):
+for _cls in (MeasuredCurve, MeasuredData, MeasuredDataError, StudyEntry, Cycle, TimeCurve,
+             MeasuredTimeData):
     _cls.__module__ = __name__
 del _cls
 
@@ -123,4 +142,7 @@ __all__ = [
     "MAX_ROWS_PER_FILE", "MAX_FILE_BYTES", "PA_ABOVE_MBAR", "BAR_AT_MOST_MBAR", "UM_ABOVE_MM",
     "M_BELOW_MM", "APERTURE_LIMIT", "APERTURE_FLOOR", "LOW_PRESSURE_MBAR",
     "GEOMETRY_KEYS", "Geometry", "DEFAULT_LAYERS_MM", "check_geometry_metadata", "geometry_of",
+    "load_time_curves", "is_time_curve_file", "TimeCurve", "Cycle", "MeasuredTimeData",
+    "TIME_REQUIRED_COLUMNS", "TIME_OPTIONAL_COLUMNS", "MIN_SAMPLES", "DEVICE_MAX_MBAR",
+    "r_parameters", "ramp_parameters", "R_COLUMNS", "RAMP_COLUMNS",
 ]

@@ -67,7 +67,11 @@ def _split(line: str) -> list[str]:
     return [f.strip().strip('"').strip() for f in line.split(",")]
 
 
-def _header(path, lineno: int, text: str, extra_columns: bool = False) -> list[str]:
+def _header(path, lineno: int, text: str, extra_columns: bool = False, *,
+            required=REQUIRED_COLUMNS, optional=OPTIONAL_COLUMNS, hints=None) -> list[str]:
+    """The column names of a header line, checked against ``required`` and ``optional``
+    (the time-curve loader passes its own columns and unit hints)."""
+    hints = {**_UNIT_HINTS, **(hints or {})}
     names = _split(text)
     if len(names) == 1:
         for sep, label in ((";", "';'"), ("\t", "tabs")):
@@ -83,18 +87,18 @@ def _header(path, lineno: int, text: str, extra_columns: bool = False) -> list[s
         seen.add(name)
         if name == "":
             raise MeasuredDataError(path, lineno, None, "a column of the header has no name")
-        if name not in REQUIRED_COLUMNS + OPTIONAL_COLUMNS and not (
-                extra_columns and name.lower() not in _UNIT_HINTS):
-            hint = _UNIT_HINTS.get(name.lower())
+        if name not in tuple(required) + tuple(optional) and not (
+                extra_columns and name.lower() not in hints):
+            hint = hints.get(name.lower())
             if hint is None:
                 hint = (
                     "unexpected column; the columns are "
-                    + ", ".join(REQUIRED_COLUMNS)
+                    + ", ".join(required)
                     + " and optionally "
-                    + ", ".join(OPTIONAL_COLUMNS)
+                    + ", ".join(optional)
                 )
             raise MeasuredDataError(path, lineno, name, hint)
-    for name in REQUIRED_COLUMNS:
+    for name in required:
         if name not in seen:
             raise MeasuredDataError(path, lineno, name, "required column is missing from the header")
     return names
@@ -118,6 +122,17 @@ def _lines(text: str):
     return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
 
 
+def _comment(stripped: str, lineno: int, comments: list, metadata: dict, meta_lines: dict):
+    """Keep a ``#`` line: every comment, and ``key: value`` ones as metadata (a later key
+    overrides an earlier one; its line is kept for located errors)."""
+    comment = stripped[1:].strip()
+    comments.append(comment)
+    key, sep, value = comment.partition(":")
+    if sep and key.strip():
+        metadata[key.strip()] = value.strip()
+        meta_lines[key.strip()] = lineno
+
+
 def _parse(path, text: str, line_numbers=None):
     comments, metadata, header, groups = [], {}, None, {}
     meta_lines = {}
@@ -129,12 +144,7 @@ def _parse(path, text: str, line_numbers=None):
         if not stripped:
             continue
         if stripped.startswith("#"):
-            comment = stripped[1:].strip()
-            comments.append(comment)
-            key, sep, value = comment.partition(":")
-            if sep and key.strip():
-                metadata[key.strip()] = value.strip()
-                meta_lines[key.strip()] = lineno
+            _comment(stripped, lineno, comments, metadata, meta_lines)
             continue
         if header is None:
             header = _header(path, lineno, line)
