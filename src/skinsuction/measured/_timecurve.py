@@ -36,7 +36,9 @@ at or below ``max(0.02 P, 3 sd, 1 mbar)``.  Each *on* stretch is a cycle:
 A cycle is a ``step`` (constant suction) if its rise and its release each take at most
 10 % of it and at least 90 % of its hold lies in the band; a ``ramp`` if its rise and
 release each take at least 25 % of it and the pressure is linear in time along both
-(R^2 >= 0.95); else ``other``.  The protocol of a curve is ``"mode 1"`` (every cycle
+(R^2 >= 0.95); else ``other``.  A ramp leaves the off level late (8 mbar at 25 mbar/s
+is 0.3 s), so its onset and its return to the off level are where the lines fitted to
+its rise and its release (10-90 % of the peak) cross 0.  The protocol of a curve is ``"mode 1"`` (every cycle
 a step, their levels within 10 %), ``"mode 2"`` (every cycle a ramp) or ``"other"``.
 
 Quantisation and noise
@@ -320,6 +322,18 @@ def load_time_curves(path: str | os.PathLike) -> MeasuredTimeData:
     MeasuredDataError
         For any problem of the file, with file, line and column in the message.
     """
+    try:
+        return _load(path)
+    except MeasuredDataError as err:
+        if err.column == "time_s" and err.reason.startswith("required column is missing"):
+            # the commonest mix-up: a pressure ramp M(p) given where time curves are read
+            raise MeasuredDataError(err.path, err.line, err.column, err.reason + " (a pressure "
+                                    "ramp M(p)? time curves have probe_mm,time_s,"
+                                    "pressure_mbar,deflection_mm)") from None
+        raise
+
+
+def _load(path) -> MeasuredTimeData:
     text = _read_text(path)
     comments, metadata, meta_lines, header, groups = [], {}, {}, None, {}
     lines = _lines(text)
@@ -638,10 +652,8 @@ def _protocol_note(protocol, cycles, t) -> str:
         return (f"mode 1: {len(cycles)} cycles at {level:.4g} mbar, {on:.3g} s on"
                 + (f" / {np.median(offs):.3g} s off" if offs else ""))
     if protocol == "mode 2":
-        rates = [c.level_mbar / span(c.onset, c.hold_start) for c in cycles
-                 if span(c.onset, c.hold_start) > 0]
         return (f"mode 2: {len(cycles)} ramp(s) up to {max(c.level_mbar for c in cycles):.4g}"
-                f" mbar at about {np.median(rates):.3g} mbar/s")
+                " mbar")
     return ("other protocol: cycles " + ", ".join(f"{c.index} {c.kind}" for c in cycles)
             + " (R0-R9 need mode 1)")
 
@@ -666,18 +678,28 @@ def _resolution(d) -> float | None:
 
 def _noise_sd(t, d, cycles) -> float:
     """Noise sd (mm) from third differences within the phases, after SETTLE_S of each
-    (a phase change is a kink, not noise)."""
-    from skinsuction.noise import noise_from_differences
-
+    (a phase change is a kink, not noise): the estimator of :mod:`skinsuction.noise`,
+    in time instead of pressure."""
     cuts = {0, d.size}
     for c in cycles:
         cuts |= {c.onset, c.hold_start, c.release} | ({c.off} if c.off is not None else set())
     cuts = sorted(k for k in cuts if 0 <= k <= d.size)
-    pieces = []
+    squares = []
     for a, b in zip(cuts[:-1], cuts[1:]):
         k = a + int(np.searchsorted(t[a:b], t[a] + SETTLE_S))
         if b - k >= 8:
-            pieces.append((t[k:b], d[k:b]))
-    if not pieces:
+            squares.append(_third_differences(t[k:b], d[k:b]) ** 2)
+    if not squares:
         return 0.0
-    return 1e-3 * noise_from_differences(pieces).sd_um
+    return float(np.sqrt(np.concatenate(squares).mean()))
+
+
+def _third_differences(t, d) -> np.ndarray:
+    """Unit-norm third differences (they remove a quadratic trend over four samples)."""
+    step = np.diff(t)
+    if np.ptp(step) <= 0.01 * step.mean():  # even sampling: the binomial weights
+        return np.diff(d, 3) / math.sqrt(20.0)
+    from skinsuction.noise import difference_weights
+
+    c = difference_weights(t, 3)
+    return (c * d[np.arange(len(c))[:, None] + np.arange(4)]).sum(axis=1)
