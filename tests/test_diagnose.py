@@ -16,7 +16,7 @@ import yaml
 
 from skinsuction.diagnose import BASELINE, Cause, FitData, Settings, add_arguments, bic, default_registry, diagnose, fit_model, misfit_test, noise_from_differences, noise_from_replicates, registry_from_config, write_report
 from skinsuction.space import RayInterpolant, RaySpace, RaySpec, SpaceMissingError, parse_ray_id, ray_id, rays_of, read_ray_space, read_ray_spaces
-from skinsuction.space import RAY_ID_PATTERN
+from skinsuction.space import RAY_ID_PATTERN, ray_bundles
 from skinsuction.space._storage import _write_parquet
 from skinsuction.diagnose._stats import describe_residuals, difference_weights
 from skinsuction.identify import window_focusing
@@ -442,10 +442,14 @@ def test_workflow_plans_one_fe_job_per_ray(tmp_path):
         cfg, sf = full["diagnosis"], full["scale_free_space"]
         spec = RaySpec.from_config(sf)
         causes = registry_from_config(sf["causes"])
-        # one job per (model, probe, ratio): the neutral rays once, in the neo-Hookean bundles
-        n_probes = len(spec.probes_mm)
-        assert counts[name]["simulate_ray_bundle"] == (n_probes * len(spec.ratio_nodes)
-                                                       * (1 + len(causes)))
+        # the jobs are ray_bundles' (the neutral rays once, in the neo-Hookean bundles),
+        # and together they run every ray of every model once
+        bundles = ray_bundles(spec, causes, sf.get("rays_per_job", 1))
+        assert counts[name]["simulate_ray_bundle"] == len(bundles)
+        n_rays = sum(len(rays_of(spec, c)) - (len(rays_of(spec)) if c else 0)
+                     for c in [None, *causes.values()])
+        assert sum(len(b) for b in bundles.values()) == n_rays
+        assert len({r for b in bundles.values() for r in b}) == n_rays
         assert counts[name]["assemble_scale_free_space"] == 1 + len(causes)
         assert counts[name]["scale_free_coverage"] == 1
         assert counts[name]["diagnose_measured"] == len(cfg["measured"])
@@ -453,7 +457,8 @@ def test_workflow_plans_one_fe_job_per_ray(tmp_path):
                      "diagnosis_fe_check"):
             assert counts[name][rule] == 1
         assert "make_example_measurement" not in counts[name]  # the example is shipped
-    assert counts["config"]["simulate_ray_bundle"] == 4 * 16 * 5  # 2, 4, 6, 8 mm; 4 causes
+    # 2, 4, 6, 8 mm; 4 causes; about 24 rays a job instead of one job per (model, probe, ratio)
+    assert counts["config"]["simulate_ray_bundle"] == 92
 
 
 # ------------------------------------------------------- identify on the scale-free space

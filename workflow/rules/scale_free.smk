@@ -39,7 +39,7 @@ try:
 except (KeyError, ValueError) as err:
     raise _config_error("scale_free_space", err)
 SF_MODELS = {BASELINE: None, **SF_CAUSES}
-SF_BUNDLES = ray_bundles(SF_SPEC, SF_CAUSES)
+SF_BUNDLES = ray_bundles(SF_SPEC, SF_CAUSES, SF.get("rays_per_job", 1))
 SF_DIR = "results/simulated_space/scale_free"
 SF_SPACES = expand(f"{SF_DIR}/{{model}}.parquet", model=SF_MODELS)
 

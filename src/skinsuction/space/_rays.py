@@ -296,28 +296,46 @@ def rays_of(spec: RaySpec, cause: Cause | None = None) -> list[dict]:
 BUNDLE_ID_PATTERN = r"[a-z][a-z0-9_]*__p[0-9.]+__r[0-9.e+-]+"
 
 
-def bundle_id(model: str, probe_mm: float, ratio: float) -> str:
-    """Name of the bundle of rays of one model at one (probe, X1h/X1d).
+def bundle_id(model: str, probe_mm: float, ratio: float, last_ratio: float | None = None) -> str:
+    """Name of the bundle of rays of one model at one probe and X1h/X1d (or a run of them).
 
     >>> bundle_id("pre_tension", 6.0, 0.001)
     'pre_tension__p6__r0.001'
+    >>> bundle_id("neo_hookean", 2.0, 1e-4, 2.0)
+    'neo_hookean__p2__r0.0001-2'
     """
-    return f"{model}__p{_fmt(probe_mm)}__r{_fmt(round_sig(ratio))}"
+    last = "" if last_ratio is None or last_ratio == ratio else f"-{_fmt(round_sig(last_ratio))}"
+    return f"{model}__p{_fmt(probe_mm)}__r{_fmt(round_sig(ratio))}{last}"
 
 
-def ray_bundles(spec: RaySpec, causes: dict) -> dict:
+def ray_bundles(spec: RaySpec, causes: dict, rays_per_job: int = 1) -> dict:
     """``{bundle_id: [ray_id, ...]}``: the FE jobs of the space.
 
-    One bundle per (model, probe, X1h/X1d): the neo-Hookean bundle holds the
-    neutral ray, a cause's bundle its other nodes, so every ray is run once and
-    adding a cause adds bundles without touching the others.
+    The rays of one (model, probe) are cut into runs of consecutive X1h/X1d of
+    about ``rays_per_job`` rays (at least one X1h/X1d each): the neo-Hookean
+    bundles hold the neutral rays, a cause's bundles its other nodes, so every
+    ray is run once and adding a cause adds bundles without touching the others.
+    A job costs about a second of start-up besides its rays (0.2-2 CPU-s each):
+    a few dozen rays a job keep that small and still fill the cores to the end.
+
+    >>> spec = RaySpec([2, 6], [0.01, 0.1, 1.0], load_max=100.0)
+    >>> sorted(ray_bundles(spec, {}, rays_per_job=2))
+    ['neo_hookean__p2__r0.01-0.1', 'neo_hookean__p2__r1', 'neo_hookean__p6__r0.01-0.1', 'neo_hookean__p6__r1']
     """
     out = {}
+    n_ratios = len(spec.ratio_nodes)
     for name, cause in {BASELINE: None, **causes}.items():
+        per_ratio = 1 if cause is None else len(cause.nodes) - 1
+        chunks = max(1, min(n_ratios, math.ceil(n_ratios * per_ratio / max(1, int(rays_per_job)))))
+        # consecutive runs of nearly equal length
+        edges = np.linspace(0, n_ratios, chunks + 1).round().astype(int)
+        runs = {spec.ratio_nodes[i]: (spec.ratio_nodes[a], spec.ratio_nodes[b - 1])
+                for a, b in zip(edges[:-1], edges[1:]) for i in range(a, b)}
         for ray in rays_of(spec, cause):
             if cause is not None and ray["coordinate"] == cause.neutral:
                 continue
-            key = bundle_id(name, ray["probe_mm"], ray["ratio"])
+            first, last = runs[ray["ratio"]]
+            key = bundle_id(name, ray["probe_mm"], first, last)
             out.setdefault(key, []).append(ray["ray_id"])
     return out
 
@@ -344,6 +362,8 @@ class RaySpace:
     coordinates: np.ndarray
     deflection_mm: dict
     metadata: dict = field(default_factory=dict)
+    #: ThicknessNuisance per given layer thickness with an sd (see spaces_at)
+    nuisance: tuple = ()
 
     @property
     def name(self) -> str:
