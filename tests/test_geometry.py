@@ -124,7 +124,7 @@ def test_a_cause_carried_to_other_layers_is_its_effect_on_their_rays():
             return spaces[BASELINE].rays(p) * 1.7, {"rays": 2, "stopped_early": 0, "cache": "-"}
 
     g = Geometry(1.3, 1.0, given=("t_d",))
-    out, notes = spaces_at(spaces, [6.0], g, Solver())
+    out, notes = spaces_at(spaces, [6.0], g, Solver(), solve_causes=False)
     assert "dermis_thickness" not in out  # given: not a free cause
     assert any("not a free cause" in n for n in notes)
     assert any("solved on demand" in n for n in notes)
@@ -141,7 +141,7 @@ def test_a_cause_at_an_aperture_between_its_probes_is_interpolated_in_log_apertu
             return spaces[BASELINE].rays(4.0) * (p / 4), {"rays": 2, "stopped_early": 0,
                                                           "cache": "-"}
 
-    out, notes = spaces_at(spaces, [5.0], Geometry(), Solver())
+    out, notes = spaces_at(spaces, [5.0], Geometry(), Solver(), solve_causes=False)
     eff = np.log(out["strain_stiffening"].rays(5.0)[..., 1:] / out[BASELINE].rays(5.0)[..., 1:])
     # the toy effect is linear in the aperture; cubic Lagrange in log(aperture) on
     # 2, 4, 6, 8 mm reproduces it to the interpolation error of a smooth function
@@ -149,6 +149,68 @@ def test_a_cause_at_an_aperture_between_its_probes_is_interpolated_in_log_apertu
     exact = -0.1 * np.log1p(np.abs(c))[None, :, None] * 5.0
     assert np.allclose(eff, np.broadcast_to(exact, eff.shape), rtol=1e-3, atol=1e-12)
     assert any("carried over" in n for n in notes)
+
+
+def test_at_given_layers_each_cause_gets_its_own_rays_solved_on_demand():
+    spaces = _toy_spaces()
+    asked = []
+
+    class Solver:  # stands in for the FE: a cause's rays depend on the layers
+        def rays(self, p, t_d, t_h, cause=None):
+            asked.append((p, t_d, t_h, None if cause is None else cause.name))
+            base = spaces[BASELINE].rays(p) * t_d
+            if cause is None:
+                return base, {"rays": 2, "stopped_early": 0, "cache": "-"}
+            c = np.asarray(cause.nodes)
+            return base * (1 + 0.01 * c * t_d)[None, :, None], {"rays": 2 * c.size,
+                                                              "stopped_early": 0, "cache": "-"}
+
+    out, notes = spaces_at(spaces, [2.0, 6.0], Geometry(1.3, 1.0, given=("t_d",)), Solver())
+    stiff = default_registry()["strain_stiffening"]
+    for p in (2.0, 6.0):
+        expected = spaces[BASELINE].rays(p) * 1.3 * (1 + 0.013 * np.asarray(stiff.nodes))[
+            None, :, None]
+        assert np.allclose(out["strain_stiffening"].rays(p), expected, rtol=1e-12)
+    assert (6.0, 1.3, 1.0, "strain_stiffening") in asked
+    assert any("strain_stiffening" in n and "solved on demand" in n for n in notes)
+    assert not any("approximation" in n for n in notes)
+
+
+def test_a_given_thickness_sd_is_a_nuisance_the_fit_recovers():
+    from skinsuction.diagnose import FitData, fit_model
+
+    spec = RaySpec([6], [0.01, 0.1], load_max=100.0, load_steps=8)
+    q = np.linspace(0.0, 1.0, 9)
+    # X1h/X1d sets the curve's exponent, X1d stretches the load: two shapes of their own
+    base = {6.0: np.stack([q, q ** 1.6])[:, None, :]}
+    spaces = {BASELINE: RaySpace(None, spec, np.array([np.nan]), base)}
+
+    def layered(p, t_d):  # and the thickness bends the curve in yet another way
+        return base[6.0] * (1 + 0.8 * (t_d - 1.3) * np.sin(np.pi * q))
+
+    class Solver:
+        def rays(self, p, t_d, t_h, cause=None):
+            return layered(p, t_d), {"rays": 2, "stopped_early": 0, "cache": "-"}
+
+    g = Geometry(1.3, 1.0, given=("t_d",), sd={"t_d": 0.1})
+    out, notes = spaces_at({BASELINE: spaces[BASELINE]}, [6.0], g, Solver())
+    (n,) = out[BASELINE].nuisance
+    assert (n.keyword, n.value, n.sd) == ("t_d", 1.3, 0.1)
+    assert np.allclose(n.plus.rays(6.0), layered(6.0, 1.4))
+    assert any("nuisance" in x for x in notes)
+    # a curve made at t_d = 1.42 (1.2 sd above the given 1.3): the fit finds it
+    p = np.linspace(2.0, 40.0, 12)
+    truth = RaySpace(None, spaces[BASELINE].spec, np.array([np.nan]),
+                     {6.0: layered(6.0, 1.42)})
+    from skinsuction.space import RayInterpolant
+
+    theta = np.array([[math.log10(0.5), math.log10(0.05)]])
+    m = RayInterpolant(truth, 6.0, p)(theta)[0]
+    fit = fit_model(out[BASELINE], {6.0: FitData(6.0, p, m, 0.01)}, seed=1)
+    assert fit.theta.size == 3
+    assert fit.parameters["t_d"] == pytest.approx(1.42, abs=0.01)
+    # the prior is in chi^2: a fit that moves the thickness by delta sd pays delta^2
+    assert fit.chi2 == pytest.approx(((1.42 - 1.3) / 0.1) ** 2, rel=0.05)
 
 
 def test_without_a_solver_a_missing_probe_or_layer_is_refused_by_name():

@@ -80,17 +80,47 @@ def with_space_error(data: dict, x1d_mpa: float) -> dict:
 
 
 class ModelCurves:
-    """Curves of one model at the measured pressures of several probes."""
+    """Curves of one model at the measured pressures of several probes.
+
+    A given layer thickness with an sd (``space.nuisance``, see
+    :class:`skinsuction.space.ThicknessNuisance`) adds one coordinate per
+    thickness to theta: its offset ``delta`` in sd units, searched in
+    ``[-NUISANCE_RANGE, NUISANCE_RANGE]`` with a standard normal prior (the
+    objective adds ``delta**2`` to chi^2).  The model's curve moves with it as the
+    neo-Hookean curve does at the same (X1d, X1h): by the quadratic through the
+    neo-Hookean curves at -1, 0 and +1 sd.
+    """
 
     def __init__(self, space: RaySpace, data: dict):
         self.space = space
         self.data = data
         self.interp = {p: RayInterpolant(space, p, d.pressure_mbar) for p, d in data.items()}
         first = next(iter(self.interp.values()))
-        self.lower, self.upper, self.d = first.lower, first.upper, first.d
+        self.nuisance = tuple(getattr(space, "nuisance", ()) or ())
+        self.n_model = first.d
+        self._brackets = [
+            {p: tuple(RayInterpolant(s, p, d.pressure_mbar) for s in (n.center, n.minus, n.plus))
+             for p, d in data.items()} for n in self.nuisance]
+        k = len(self.nuisance)
+        self.lower = np.concatenate([first.lower, np.full(k, -NUISANCE_RANGE)])
+        self.upper = np.concatenate([first.upper, np.full(k, NUISANCE_RANGE)])
+        self.d = self.n_model + k
 
     def __call__(self, theta) -> dict:
-        return {p: f(theta) for p, f in self.interp.items()}
+        theta = np.asarray(theta, dtype=float)
+        own = theta[:, :self.n_model]
+        out = {p: f(own) for p, f in self.interp.items()}
+        for j, brackets in enumerate(self._brackets):
+            delta = theta[:, self.n_model + j][:, None]
+            for p, (center, minus, plus) in brackets.items():
+                m0, lo, hi = center(own[:, :2]), minus(own[:, :2]), plus(own[:, :2])
+                out[p] = out[p] + delta * (hi - lo) / 2 + delta ** 2 * (hi + lo - 2 * m0) / 2
+        return out
+
+    def prior(self, theta) -> np.ndarray:
+        """``delta**2`` summed over the nuisance coordinates, (N,)."""
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        return np.sum(theta[:, self.n_model:] ** 2, axis=1)
 
     def parameters(self, theta) -> dict:
         """Physical parameters (MPa, mm, 1) of one theta."""
@@ -99,7 +129,13 @@ class ModelCurves:
         cause = self.space.cause
         if cause is not None:
             out[cause.symbol] = float(cause.value(cause.from_axis(theta[2]), x1d))
+        for j, n in enumerate(self.nuisance):
+            out[n.symbol] = float(n.thickness(theta[self.n_model + j]))
         return out
+
+
+#: Search range of a thickness nuisance, in sd units either side of the given value.
+NUISANCE_RANGE = 3.0
 
 
 class _Objective:
@@ -118,6 +154,7 @@ class _Objective:
             d = self.model.data[p]
             r = d.whiten((d.deflection_mm[None, :] - m) * (1e3 / d.sigma_um))
             chi2 = chi2 + np.einsum("nt,nt->n", r, r)
+        chi2 = chi2 + self.model.prior(theta)
         cost = 0.5 * np.asarray(chi2, dtype=float)
         cost[~np.isfinite(cost)] = np.inf
         return cost
@@ -130,6 +167,7 @@ class _Objective:
         for p, m in self.model(np.asarray(theta, dtype=float)[None, :]).items():
             d = self.model.data[p]
             out.append(d.whiten((d.deflection_mm - m[None, 0]) * (1e3 / d.sigma_um))[0])
+        out.append(np.asarray(theta, dtype=float)[self.model.n_model:])  # the prior
         r = np.concatenate(out)
         return np.where(np.isfinite(r), r, 1e6)
 
@@ -176,6 +214,7 @@ def evaluate_fit(model: ModelCurves, theta, name: str, wf=None) -> Fit:
         chi2 += float((z ** 2).sum())
         sq += float((e ** 2).sum())
         n += d.n
+    chi2 += float(model.prior(theta)[0])  # a given thickness's prior term
     if not math.isfinite(chi2):
         chi2 = sq = math.inf
     return Fit(name, np.asarray(theta, dtype=float), model.parameters(theta), chi2, n,
@@ -259,13 +298,17 @@ def fit_bounds(space: RaySpace, data: dict, theta) -> dict:
         names.append(cause.symbol)
         kinds.append("axis")
         keys.append((f"scale_free_space.causes.{cause.name}.nodes",) * 2)
+    for n in model.nuisance:
+        names.append(n.symbol)
+        kinds.append("axis")
+        keys.append((f"the given {n.symbol} (its sd, {NUISANCE_RANGE:g} sd searched)",) * 2)
     flags = bound_flags(obj, theta, names, kinds, keys)
     params = model.parameters(np.asarray(theta, dtype=float))
     for f in flags:
         f["value"] = params[f["parameter"]]
         f["neutral"] = False
     if cause is not None:
-        f = flags[-1]
+        f = flags[2]
         end = cause.nodes[0] if f["side"] == "lower" else cause.nodes[-1]
         f["neutral"] = bool(f["edge"] == "window" and end == cause.neutral)
     return {f["parameter"]: f for f in flags}
@@ -286,14 +329,19 @@ def fit_intervals(space: RaySpace, data: dict, theta, *, noise_dof: float = math
 
     def residuals(t):
         curves = model(t)
-        return np.concatenate([model.data[p].whiten((model.data[p].deflection_mm[None, :] - c)
-                                                    * (1e3 / model.data[p].sigma_um))
-                               for p, c in curves.items()], axis=1)
+        parts = [model.data[p].whiten((model.data[p].deflection_mm[None, :] - c)
+                                      * (1e3 / model.data[p].sigma_um))
+                 for p, c in curves.items()]
+        parts.append(np.asarray(t, dtype=float)[:, model.n_model:])  # the thickness prior
+        return np.concatenate(parts, axis=1)
 
     params = {"X1d": lambda t: 10.0 ** t[:, 0], "X1h": lambda t: 10.0 ** (t[:, 0] + t[:, 1])}
     if cause is not None:
         params[cause.symbol] = lambda t: np.asarray(
             cause.value(cause.from_axis(t[:, 2]), 10.0 ** t[:, 0]), dtype=float)
+    for j, n in enumerate(model.nuisance):
+        params[n.symbol] = (lambda t, j=j, n=n:
+                            np.asarray(n.thickness(t[:, model.n_model + j]), dtype=float))
     ci = profile_intervals(residuals, theta, model.lower, model.upper, params, level=level,
                            noise_dof=noise_dof)
     if cause is not None and cause.neutral == cause.lower:

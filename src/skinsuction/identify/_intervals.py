@@ -79,7 +79,7 @@ from scipy import stats
 __all__ = ["Interval", "LikelihoodIntervals", "profile_intervals", "interval_threshold"]
 
 #: Grid points per axis, by the number of fitted parameters.
-POINTS_PER_AXIS = {1: 401, 2: 81, 3: 25}
+POINTS_PER_AXIS = {1: 401, 2: 81, 3: 25, 4: 13, 5: 9}
 #: Half-width of the first box, in Gauss-Newton standard errors.
 BOX_HALF_WIDTH_SE = 4.0
 #: Fewest cells the region must span along each axis before the box is shrunk.

@@ -50,6 +50,7 @@ from ._geometry import (
     GeometryOutsideSpace,
     OnDemandRays,
     default_cache_dir,
+    ThicknessNuisance,
     spaces_at,
 )
 from ._grid import (
@@ -155,5 +156,5 @@ __all__ = [
     "NeoHookeanSlice", "RayInterpolant", "TabulatedInterpolant",
     # every probe and the subject's layers
     "DEFAULT_LAYERS_MM", "Geometry", "GeometryOutsideSpace", "OnDemandRays",
-    "default_cache_dir", "spaces_at",
+    "default_cache_dir", "spaces_at", "ThicknessNuisance",
 ]

@@ -29,7 +29,7 @@ import hashlib
 import logging
 import math
 import os
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -40,7 +40,7 @@ from ._causes import BASELINE
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Geometry", "GeometryOutsideSpace", "OnDemandRays", "spaces_at",
+__all__ = ["Geometry", "GeometryOutsideSpace", "OnDemandRays", "spaces_at", "ThicknessNuisance",
            "DEFAULT_LAYERS_MM", "default_cache_dir"]
 
 #: Thicknesses are rounded to this (mm) before rays are solved for them: a
@@ -101,34 +101,66 @@ class OnDemandRays:
         self.dir = Path(cache_dir or default_cache_dir()) / "rays" / key
         self.solved = 0  # geometries solved by this object (not read from the cache)
 
-    def _ray_ids(self, probe_mm, t_d, t_h):
+    def _ray_ids(self, probe_mm, t_d, t_h, cause=None, coordinate=None):
         from ._rays import ray_id
         from ._storage import round_sig
 
         x1d = self.spec.x1d_ref
-        return [ray_id({"probe_mm": probe_mm, "bottom": self.spec.bottom,
-                        "x1d": round_sig(x1d), "x1h": round_sig(r * x1d),
-                        "t_d": t_d, "t_h": t_h})
-                for r in self.spec.ratio_nodes]
+        out = []
+        for r in self.spec.ratio_nodes:
+            params = {"probe_mm": probe_mm, "bottom": self.spec.bottom,
+                      "x1d": round_sig(x1d), "x1h": round_sig(r * x1d),
+                      "t_d": t_d, "t_h": t_h}
+            if cause is not None:
+                params.update({k: round_sig(v, 6) for k, v in
+                               cause.simulate_keywords(coordinate, x1d).items()})
+            out.append(ray_id(params))
+        return out
 
-    def rays(self, probe_mm: float, t_d: float, t_h: float):
-        """``(rays (n_r, 1, n_p) in mm, info)`` of one probe at one geometry.
+    def rays(self, probe_mm: float, t_d: float, t_h: float, cause=None):
+        """``(rays (n_r, n_c, n_p) in mm, info)`` of one probe at one geometry.
 
+        ``cause=None``: the neo-Hookean rays (``n_c = 1``); a :class:`Cause`: its
+        rays at every one of its nodes (the neutral node is the neo-Hookean ray).
+        A thickness cause (``t_d``, ``t_h``) replaces that layer's thickness.
         The rays are solved for the reference aperture of the dimensionless
         geometry (2 mm, thicknesses ``t/a``) and scaled by ``a`` (geometric
         similarity), so similar measurements share them.
         """
-        from ._storage import _read_parquet, round_sig
+        from ._storage import round_sig
 
         a = probe_mm / 2
         ref_td, ref_th = round_sig(t_d / a, 6), round_sig(t_h / a, 6)
-        path = self.dir / f"td{ref_td:g}_th{ref_th:g}.parquet"
+        if cause is None:
+            return self._read(ref_td, ref_th, a, None, None)
+        columns, infos = [], []
+        for c in cause.nodes:
+            if c == cause.neutral:
+                m, info = self._read(ref_td, ref_th, a, None, None)
+            else:
+                m, info = self._read(ref_td, ref_th, a, cause, c)
+            columns.append(m[:, 0])
+            infos.append(info)
+        info = {"cache": str(self.dir), "rays": sum(i["rays"] for i in infos),
+                "stopped_early": sum(i["stopped_early"] for i in infos)}
+        return np.stack(columns, axis=1), info
+
+    def _read(self, ref_td, ref_th, a, cause, c):
+        from ._storage import _read_parquet, round_sig
+
+        if cause is None:
+            path = self.dir / f"td{ref_td:g}_th{ref_th:g}.parquet"
+            coord = None
+        else:
+            # a thickness node is a length: it scales with the aperture like the layers
+            coord = round_sig(c / a, 6) if cause.geometric else c
+            path = self.dir / f"td{ref_td:g}_th{ref_th:g}__{cause.keyword}{coord:g}.parquet"
+        ids = self._ray_ids(2.0, ref_td, ref_th, cause, coord)
         if not path.exists():
-            self._solve(path, ref_td, ref_th)
+            self._solve(path, ids, ref_td, ref_th)
         frame, meta = _read_parquet(path)
         p = np.asarray(self.spec.pressures_mbar)
         out = np.full((len(self.spec.ratio_nodes), 1, p.size), np.nan)
-        ids = self._ray_ids(2.0, ref_td, ref_th)
         for i, rid in enumerate(ids):
             g = frame[frame["ray_id"] == rid]
             if len(g) != p.size:
@@ -138,11 +170,10 @@ class OnDemandRays:
         stopped = sum(1 for r in (meta.get("rays") or {}).values() if not r.get("converged"))
         return out, {"cache": str(path), "rays": len(ids), "stopped_early": stopped}
 
-    def _solve(self, path: Path, td: float, th: float):
+    def _solve(self, path: Path, ids, td: float, th: float):
         from ._ray_solve import compute_bundle
 
-        ids = self._ray_ids(2.0, td, th)
-        log.info("solving %d neo-Hookean rays on demand for t_d/a = %g, t_h/a = %g -> %s",
+        log.info("solving %d FE rays on demand for t_d/a = %g, t_h/a = %g -> %s",
                  len(ids), td, th, path)
         path.parent.mkdir(parents=True, exist_ok=True)
         args = (self.spec.pressures_mbar, self.spec.mesh, list(self.spec.fallback))
@@ -157,6 +188,43 @@ class OnDemandRays:
         else:
             compute_bundle(ids, path, *args)
         self.solved += 1
+
+
+@dataclass(frozen=True)
+class ThicknessNuisance:
+    """A given layer thickness with its sd, as a nuisance parameter of every fit.
+
+    A measured thickness is not exact (ultrasound and OCT: about 0.05-0.1 mm), and
+    0.1 mm of dermis under the 6 mm probe moves the fitted X1h by tens of percent
+    (docs/geometry.md).  The fits therefore search ``delta``, the thickness
+    offset in units of its sd, with a standard normal prior, and the curve of
+    every model moves with it as the neo-Hookean one does: the quadratic through
+    the neo-Hookean curves at ``value - sd``, ``value``, ``value + sd`` (solved on
+    demand), added to the model's curve.
+
+    Attributes
+    ----------
+    keyword : {"t_d", "t_h"}
+    value, sd : float
+        The given thickness and its sd (mm).
+    center, minus, plus : RaySpace
+        Neo-Hookean rays at ``value``, ``value - sd`` and ``value + sd``.
+    """
+
+    keyword: str
+    value: float
+    sd: float
+    center: object
+    minus: object
+    plus: object
+
+    @property
+    def symbol(self) -> str:
+        return self.keyword
+
+    def thickness(self, delta):
+        """Thickness (mm) of an offset in sd units."""
+        return self.value + np.asarray(delta, dtype=float) * self.sd
 
 
 def _merge_bundles(parts, path):
@@ -206,7 +274,8 @@ def _cause_effect(space, probe_mm: float):
     return np.tensordot(w[0], block, axes=(0, 0))
 
 
-def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays | None = None):
+def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays | None = None,
+              solve_causes: bool = True):
     """The ray spaces of one measurement: every model at its probes and layers.
 
     Parameters
@@ -217,8 +286,14 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
         Apertures (mm) of the measurement.
     geometry : Geometry
     on_demand : OnDemandRays, optional
-        Solves the neo-Hookean rays of a probe or geometry the space lacks; without
-        it such a measurement raises :class:`GeometryOutsideSpace`.
+        Solves the rays of a probe or geometry the space lacks; without it such a
+        measurement raises :class:`GeometryOutsideSpace`.
+    solve_causes : bool
+        With ``on_demand``, also solve every cause's rays at this geometry (about
+        700 FE rays for two probes, once: cached).  Otherwise a cause's effect on
+        log M is carried over from the layers and probes it was simulated for, an
+        approximation measured to fail at other dermis thicknesses
+        (docs/geometry.md), and the notes say so.
 
     Returns
     -------
@@ -288,6 +363,20 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
             out[name] = RaySpace(cause, spec, space.coordinates,
                                  {p: space.rays(p) for p in probes}, space.metadata)
             continue
+        if on_demand is not None and solve_causes:
+            arrays, n_rays, n_stopped = {}, 0, 0
+            for p in probes:
+                if default and space.has_probe(p):
+                    arrays[p] = space.rays(p)
+                    continue
+                arrays[p], info = on_demand.rays(p, t_d, t_h, cause)
+                n_rays += info["rays"]
+                n_stopped += info["stopped_early"]
+            notes.append(f"{name}: its rays at this geometry solved on demand ({n_rays} FE "
+                         f"rays, {n_stopped} stopped early)")
+            out[name] = RaySpace(cause, spec, np.asarray(cause.nodes, dtype=float), arrays,
+                                 {**space.metadata, "geometry": geometry.to_dict()})
+            continue
         arrays = {}
         for p in probes:
             effect = _cause_effect(space, p)
@@ -312,4 +401,35 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
                      "(an approximation)")
         out[name] = RaySpace(cause, spec, space.coordinates, arrays,
                              {**space.metadata, "geometry": geometry.to_dict()})
+    nuisance = _nuisances(out[BASELINE], probes, geometry, (t_d, t_h), on_demand, notes)
+    for space in out.values():
+        space.nuisance = nuisance
     return out, notes
+
+
+def _nuisances(center, probes, geometry, layers, on_demand, notes) -> tuple:
+    """A :class:`ThicknessNuisance` per given thickness with an sd (rays on demand)."""
+    from ._rays import RaySpace
+
+    out = []
+    for i, key in enumerate(("t_d", "t_h")):
+        sd = (geometry.sd or {}).get(key)
+        if key not in geometry.given or not sd:
+            continue
+        if on_demand is None:
+            notes.append(f"the {key} sd ({sd:g} mm) is not used: its rays would be solved on "
+                         "demand, which is not allowed")
+            continue
+        value = layers[i]
+        brackets = []
+        for t in (value - sd, value + sd):
+            t = max(_round_mm(t), THICKNESS_RESOLUTION_MM)
+            other = list(layers)
+            other[i] = t
+            rays = {p: on_demand.rays(p, *other)[0] for p in probes}
+            brackets.append(RaySpace(None, center.spec, np.array([math.nan]), rays,
+                                     {**center.metadata, key: t}))
+        out.append(ThicknessNuisance(key, value, float(sd), center, *brackets))
+        notes.append(f"the given {key} = {value:g} ± {sd:g} mm is a nuisance parameter of every "
+                     "fit (Gaussian prior; neo-Hookean rays at ±1 sd solved on demand)")
+    return tuple(out)
