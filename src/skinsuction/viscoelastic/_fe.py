@@ -48,11 +48,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model import MeshSettings, ParameterError, SuctionTest
-from ..model._fast import FastAssembly, _material
+from ..model._fast import _SWAP, FastAssembly, _material
 from ..model._simulate import NoEquilibrium
 from ._prony import layer_spectra
 
-BRANCHES = ("full", "isochoric")
+BRANCHES = ("full", "isochoric", "whole_tensor")
 
 
 def second_piola(f, P):
@@ -78,6 +78,16 @@ def first_piola(f, S):
     Szz, Szr, Srz, Srr, Shh = S
     return np.stack([a * Szz + b * Srz, a * Szr + b * Srr, c * Szz + d * Srz,
                      c * Szr + d * Srr, h * Shh])
+
+
+def _inverse_transpose(f):
+    """``F^-T`` (5, n) and ``d(F^-T)/dF`` (n, 5, 5) in the 5-component order."""
+    a, b, c, d, h = f
+    det2 = a * d - b * c
+    ift = np.stack([d / det2, -c / det2, -b / det2, a / det2, 1.0 / h])
+    ext = np.concatenate([ift, np.zeros((1,) + ift.shape[1:])])
+    swap = (ext[:, None] * ext[None, :]).reshape(36, -1)[_SWAP]  # iFT_iL iFT_kJ
+    return ift, -swap.transpose(2, 0, 1)
 
 
 def _history_tangent(H):
@@ -122,10 +132,12 @@ class ViscousAssembly(FastAssembly):
         # branches with g = 0 everywhere do nothing: drop them
         live = np.any(obj.g > 0, axis=1)
         obj.g, obj.tau = obj.g[live], obj.tau[live]
-        obj.H = None
+        obj.H, obj.h_vol = None, None
         zero = np.zeros(fast.ndof)
-        obj.S_br = obj._branch_stress(obj._components(zero))  # the pre-stress, if any
+        # the branch stresses at rest (the pre-stress, if any), taken as relaxed
+        obj.S_br, obj.pi_br = obj._branch_stress(obj._components(zero))
         obj.Q = np.zeros((len(obj.g),) + obj.S_br.shape)
+        obj.q = np.zeros((len(obj.g),) + obj.pi_br.shape)
         obj._step = None
         return obj
 
@@ -134,13 +146,20 @@ class ViscousAssembly(FastAssembly):
         return len(self.g) > 0
 
     def _branch_stress(self, f):
-        """``S_br`` of a branch of unit fraction, in the mesh's configuration."""
+        """The stresses a branch of unit fraction relaxes, in the mesh's configuration:
+        the tensor ``S_br`` (isochoric part; the whole law for ``"whole_tensor"``) and
+        the scalar Kirchhoff pressure ``pi`` of the penalty (``"full"``; else 0),
+        whose stress ``pi C^-1`` stays hydrostatic in any configuration."""
         x1, x2, bulk = self.base
-        if self.branches == "isochoric":
-            bulk = np.zeros_like(bulk)
+        zero = np.zeros_like(bulk)
         with np.errstate(invalid="ignore", divide="ignore"):
-            P, _ = _material(f, x1, x2, bulk, self.f0, tangent=False)
-            return second_piola(f, P)
+            P, _ = _material(f, x1, x2, bulk if self.branches == "whole_tensor" else zero,
+                             self.f0, tangent=False)
+            S = second_piola(f, P)
+            if self.branches != "full":
+                return S, np.zeros(f.shape[1])
+            Pv, _ = _material(f, zero, zero, bulk, self.f0, tangent=False)
+            return S, Pv[4] * f[4]  # P_vol = pi F^-T: its hoop component is pi / F_hoop
 
     def begin_step(self, dt):
         """Fix the history and the scaled moduli of a step of ``dt`` seconds."""
@@ -153,8 +172,9 @@ class ViscousAssembly(FastAssembly):
         Gamma = gamma.sum(axis=0)
         x1, x2, bulk = self.base
         self.x1, self.x2 = x1 * (1.0 + Gamma), x2 * (1.0 + Gamma)
-        self.bulk = bulk * (1.0 + Gamma) if self.branches == "full" else bulk
+        self.bulk = bulk if self.branches == "isochoric" else bulk * (1.0 + Gamma)
         self.H = np.einsum("bn,bpn->pn", e, self.Q) - Gamma * self.S_br
+        self.h_vol = np.einsum("bn,bn->n", e, self.q) - Gamma * self.pi_br
         self._step = (e, gamma)
 
     def commit(self, u):
@@ -162,14 +182,22 @@ class ViscousAssembly(FastAssembly):
         if not self.viscous:
             return
         e, gamma = self._step
-        S = self._branch_stress(self._components(u))
+        S, pi = self._branch_stress(self._components(u))
         self.Q = e[:, None] * self.Q + gamma[:, None] * (S - self.S_br)
-        self.S_br = S
+        self.q = e * self.q + gamma * (pi - self.pi_br)
+        self.S_br, self.pi_br = S, pi
+
+    def _history_stress(self, f):
+        """``F H + h_vol F^-T`` and its tangent at the fixed history."""
+        ift, dift = _inverse_transpose(f)
+        P = first_piola(f, self.H) + self.h_vol * ift
+        return P, _history_tangent(self.H) + self.h_vol[:, None, None] * dift
 
     def residual(self, u, pressure):
         r = super().residual(u, pressure)
         if self.H is not None:
-            P = first_piola(self._components(u), self.H)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                P, _ = self._history_stress(self._components(u))
             re = (self.Bw @ P.T[:, :, None]).reshape(-1, self.nq, self.B.shape[1]).sum(axis=1)
             r += np.bincount(self.eldofs.ravel(), re.ravel(), minlength=self.ndof)
         return r
@@ -177,7 +205,7 @@ class ViscousAssembly(FastAssembly):
     def tangent(self, u, pressure):
         data = super().tangent(u, pressure)
         if self.H is not None:
-            A = _history_tangent(self.H)
+            _, A = self._history_stress(self._components(u))
             nx = self.B.shape[1]
             Ke = ((self.Bw @ A) @ self.BT).reshape(-1, self.nq, nx, nx).sum(axis=1)
             data = data + np.bincount(self.slot, Ke.ravel()[self.keep], minlength=self.nnz)
