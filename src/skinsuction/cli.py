@@ -9,6 +9,7 @@
         [--seed 0] --out DIR
     skinsuction diagnose MEASURED.csv --out DIR
     skinsuction study FOLDER_OR_LONG.csv --out DIR [--no-diagnose] [--workers 2]
+    skinsuction rparams TIME_CURVES.csv --out DIR [--ue-time-s 0.1]
 
 Each subcommand is a :class:`Command` in :data:`COMMANDS`: a function that adds
 its arguments to an ``argparse`` parser and a function that runs it and returns
@@ -334,6 +335,136 @@ def _run_study(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
+# ------------------------------------------------------------------ rparams
+def _rparams_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("measured", metavar="FILE",
+                   help="time curves: CSV with columns probe_mm (mm), time_s (s), "
+                        "pressure_mbar (suction, positive, mbar), deflection_mm (mm, zeroed "
+                        "before the first suction) and optionally curve (replicate id); '#' "
+                        "lines are comments")
+    p.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder: rparams.csv (one row per probe and cycle of a mode-1 "
+                        "curve: Ue, Uv, Uf, Ur, Ua in mm, R0-R9), ramp_parameters.csv (mode-2 "
+                        "curves) and rparams.json (options, phases, resolution, noise, "
+                        "versions), written atomically")
+    p.add_argument("--ue-time-s", type=positive, default=0.1, metavar="S",
+                   help="when Ue is read after the suction onset, and the retraction Ur "
+                        "after the release onset, in s (default 0.1)")
+
+
+def _table_text(frame) -> str:
+    mm = {"Ue", "Uv", "Uf", "Ur", "Ua", "R0", "R1", "R3", "R4", "R8", "R9", "Umax", "Ures",
+          "Uend"}
+    fmt = {c: (lambda v: f"{v:.3f}") for c in frame.columns if c in mm or c.startswith("R")}
+    fmt.update({c: (lambda v: f"{v:.4g}") for c in ("probe_mm", "p_max_mbar", "rate_mbar_s",
+                                                    "hysteresis_mbar_mm",
+                                                    "hysteresis_fraction")
+                if c in frame.columns})
+    return frame.to_string(index=False, formatters=fmt, na_rep="nan")
+
+
+def _run_rparams(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    import pandas as pd
+
+    from skinsuction import __version__
+    from skinsuction._files import atomic_output, file_sha256
+    from skinsuction.measured import (
+        R_COLUMNS,
+        RAMP_COLUMNS,
+        load_time_curves,
+        r_parameters,
+        ramp_parameters,
+    )
+    from skinsuction.provenance import collect
+
+    data = load_time_curves(args.measured)
+    r_frames, ramp_frames, skipped = [], [], []
+    for c in data.curves:
+        try:
+            if c.protocol == "mode 1":
+                r_frames.append(r_parameters(c, ue_time_s=args.ue_time_s))
+            elif c.protocol == "mode 2":
+                ramp_frames.append(ramp_parameters(c))
+            else:
+                skipped.append(c)
+        except ValueError as err:
+            raise CLIError(f"{args.measured}: {err}") from None
+    if not r_frames and not ramp_frames:
+        raise CLIError(f"{args.measured}: no curve is mode 1 (cycles at a constant suction) or "
+                       "mode 2 (a ramp up and down): "
+                       + "; ".join(n for n in data.notes if "protocol" in n))
+    # a curve column only when the file names its curves
+    named = any(c.curve for c in data.curves)
+    keep = [k for k in R_COLUMNS if named or k != "curve"]
+    rtable = pd.concat(r_frames, ignore_index=True)[keep] if r_frames else \
+        pd.DataFrame(columns=keep)
+    out = Path(args.out)
+    written = []
+    try:
+        with atomic_output(out / "rparams.csv") as tmp:
+            rtable.to_csv(tmp, index=False, float_format="%.6g")
+        written.append(out / "rparams.csv")
+        if ramp_frames:
+            ramp = pd.concat(ramp_frames, ignore_index=True)[
+                [k for k in RAMP_COLUMNS if named or k != "curve"]]
+            with atomic_output(out / "ramp_parameters.csv") as tmp:
+                ramp.to_csv(tmp, index=False, float_format="%.6g")
+            written.append(out / "ramp_parameters.csv")
+        record = {
+            "command": "rparams",
+            "settings": {"ue_time_s": args.ue_time_s},
+            "input": {"path": str(args.measured), "sha256": file_sha256(args.measured)},
+            "skinsuction_version": __version__,
+            "curves": [_curve_record(c) for c in data.curves],
+            "metadata": data.metadata,
+            "notes": list(data.notes),
+            "warnings": list(data.warnings),
+            "files": [p.name for p in written] + ["rparams.json"],
+            "provenance": collect(config={"ue_time_s": args.ue_time_s}),
+        }
+        with atomic_output(out / "rparams.json") as tmp:
+            tmp.write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+        written.append(out / "rparams.json")
+    except OSError as err:
+        raise CLIError(f"{args.out}: cannot write ({err.strerror or err})") from None
+    for note in data.notes:
+        print(note)
+    if r_frames:
+        print(f"\nR parameters (mm and ratios; Ue read {args.ue_time_s:g} s after onset, Ur "
+              f"{args.ue_time_s:g} s after release; R3, R4, R9 of the measurement):")
+        print(_table_text(rtable))
+    if ramp_frames:
+        print("\nmode 2 (R0-R9 need a hold at constant suction and do not apply):")
+        print(_table_text(ramp))
+    for c in skipped:
+        print(f"{c.label}: {c.protocol}; neither R0-R9 nor ramp parameters apply")
+    for w in data.warnings:
+        print(f"warning: {w}", file=sys.stderr)
+    print(f"wrote {', '.join(str(p) for p in written)}")
+    return EXIT_OK
+
+
+def _curve_record(c) -> dict:
+    t = c.time_s
+
+    def at(k):
+        return None if k is None or k >= t.size else float(t[k])
+
+    return {
+        "probe_mm": c.probe_mm, "curve": c.curve, "protocol": c.protocol,
+        "samples": len(c), "resolution_mm": c.resolution_mm, "noise_sd_mm": c.noise_sd_mm,
+        "quantisation_sd_mm": c.quantisation_sd_mm,
+        "pressure_noise_mbar": c.pressure_noise_mbar, "notes": list(c.notes),
+        "cycles": [{"cycle": k.index, "kind": k.kind, "level_mbar": k.level_mbar,
+                    "onset_s": at(k.onset), "hold_start_s": at(k.hold_start),
+                    "hold_end_s": at(k.hold_end), "release_s": at(k.release),
+                    "off_s": at(k.off), "end_s": at(k.end)} for k in c.cycles],
+    }
+
+
 # -------------------------------------------------------------- check-config
 def _check_config_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("configfiles", nargs="+", metavar="CONFIG.yaml",
@@ -427,6 +558,20 @@ COMMANDS = {
             "groups), DIR/study.json and figures.",
             _study_arguments,
             _run_study,
+        ),
+        Command(
+            "rparams",
+            "the standard Cutometer parameters (Ue ... Ua, R0-R9) of time curves",
+            "Read Cutometer time curves (deflection and suction against time), find the "
+            "phases of the suction (rise, hold, release, off) and the protocol (mode 1: "
+            "cycles at a constant suction; mode 2: a ramp up and down), the deflection's "
+            "resolution and noise, and compute per probe and cycle Ue (read --ue-time-s after "
+            "the onset), Uv, Uf, Ur, Ua (mm) and R0-R9 (mode 1), or the largest and residual "
+            "deformation and the hysteresis (mode 2). Writes DIR/rparams.csv, "
+            "DIR/ramp_parameters.csv (mode 2) and DIR/rparams.json; prints the table. Bad "
+            "input gives a one-line error naming the file, line and column, exit code 2.",
+            _rparams_arguments,
+            _run_rparams,
         ),
         Command(
             "check-config",

@@ -35,8 +35,9 @@ R3 and R4 are the largest and smallest deflection of the last cycle (onset to th
 of the file), from the file's zero; they, and ``R9 = R3 - R0`` of the *first* cycle
 (the "tiring" of the skin over the measurement), are properties of the measurement,
 not of a cycle: every row of a curve carries the same R3, R4 and R9.  A reading that
-falls after the end of the file (Ur, Ua of a last cycle cut short) is NaN, and so are
-the R values made from it.
+falls after the end of the file is NaN, and so are the R values made from it: Ur if
+the file ends less than ``ue_time_s`` after the last release, Ua if the last off time
+is shorter than 90 % of the earlier ones' (then Ua would be read early).
 
 Mode 2 (ramp up and down) has no hold at constant suction, so R0-R9 do not apply;
 :func:`ramp_parameters` gives per ramp the largest deformation, the residual one when
@@ -115,6 +116,9 @@ def r_parameters(curve, ue_time_s: float = 0.1):
     last = curve.cycles[-1]
     tail = d[last.onset:]
     r3, r4 = float(tail.max()), float(tail.min())
+    # the off time of a last cycle is complete if it lasts 90 % of the earlier ones'
+    offs = [t[c.end] - t[c.release] for c in curve.cycles[:-1]]
+    full_off = 0.9 * float(np.median(offs)) if offs else 0.0
     rows = []
     for c in curve.cycles:
         t_on, t_rel = t[c.onset], t[min(c.release, t.size - 1)]
@@ -129,7 +133,8 @@ def r_parameters(curve, ue_time_s: float = 0.1):
         released = c.release < t.size
         ur = (d_f - float(np.interp(t_rel + ue_time_s, t, d))
               if released and t_rel + ue_time_s <= t[c.end] else math.nan)
-        ua = d_f - float(d[c.end]) if c.off is not None else math.nan
+        complete = c.off is not None and (c is not last or t[c.end] - t_rel >= full_off)
+        ua = d_f - float(d[c.end]) if complete else math.nan
         rows.append({"probe_mm": curve.probe_mm, "curve": curve.curve, "cycle": c.index,
                      "Ue": ue, "Uv": uf - ue, "Uf": uf, "Ur": ur, "Ua": ua})
     r0_first = rows[0]["Uf"]

@@ -37,8 +37,8 @@ A cycle is a ``step`` (constant suction) if its rise and its release each take a
 10 % of it and at least 90 % of its hold lies in the band; a ``ramp`` if its rise and
 release each take at least 25 % of it and the pressure is linear in time along both
 (R^2 >= 0.95); else ``other``.  A ramp leaves the off level late (8 mbar at 25 mbar/s
-is 0.3 s), so its onset and its return to the off level are where the lines fitted to
-its rise and its release (10-90 % of the peak) cross 0.  The protocol of a curve is ``"mode 1"`` (every cycle
+is 0.3 s), so its onset and its return to the off level are the samples nearest to where the
+lines fitted to its rise and its release (10-90 % of the peak) cross 0.  The protocol of a curve is ``"mode 1"`` (every cycle
 a step, their levels within 10 %), ``"mode 2"`` (every cycle a ramp) or ``"other"``.
 
 Quantisation and noise
@@ -399,7 +399,9 @@ def _build(path, probe, curve, lines, t, p, d):
     if not cycles:
         k = int(np.argmax(p))
         raise MeasuredDataError(path, int(lines[k]), "pressure_mbar", f"the {label} has no "
-                                f"suction above its noise (largest {p[k]:g} mbar)")
+                                f"suction lasting more than 2 samples (largest {p[k]:g} mbar): "
+                                "spikes only, or sampled too slowly to show a hold (need >= 3 "
+                                "samples of it; sample faster)")
     for c in cycles:
         if c.kind == "step" and c.hold_end - c.hold_start + 1 < 3:
             raise MeasuredDataError(path, int(lines[c.hold_start]), "time_s", f"the hold of "
@@ -544,8 +546,10 @@ def _find_cycles(t, p, p_sd) -> list:
     big = float(ps.max())
     if big <= 0:
         return []
-    on_level = max(_ON_FRACTION * big, 6.0 * p_sd)
-    off_level = max(_OFF_FRACTION * big, 3.0 * p_sd, 1.0)
+    # the noise sets the switch, but never above half the suction: with holds of a few
+    # samples every second difference is a switch and the noise sd comes out large
+    on_level = max(_ON_FRACTION * big, min(6.0 * p_sd, 0.6 * big))
+    off_level = max(_OFF_FRACTION * big, min(3.0 * p_sd, 0.1 * big), 1.0)
     if big <= on_level or big <= off_level:
         return []
     spans, state, start = [], False, 0
@@ -585,8 +589,8 @@ def _find_cycles(t, p, p_sd) -> list:
 
 
 def _ramp_ends(t, ps, a, hs, he, e, off, previous_off):
-    """Onset and return of a ramp: the samples where its rising and falling lines
-    (fitted between 10 % and 90 % of the peak) cross 0."""
+    """Onset and return of a ramp: the samples nearest to where its rising and falling
+    lines (fitted between 10 % and 90 % of the peak) cross 0."""
     from scipy.stats import linregress
 
     peak = ps[hs:he + 1].max()
@@ -595,7 +599,7 @@ def _ramp_ends(t, ps, a, hs, he, e, off, previous_off):
     if up.size >= 3:
         fit = linregress(t[up], ps[up])
         if fit.slope > 0:
-            k = int(np.searchsorted(t, -fit.intercept / fit.slope))
+            k = int(np.argmin(np.abs(t - (-fit.intercept / fit.slope))))
             a = min(a, max(k, previous_off or 0))
     if off is not None:
         down = np.arange(he, e)
@@ -603,7 +607,7 @@ def _ramp_ends(t, ps, a, hs, he, e, off, previous_off):
         if down.size >= 3:
             fit = linregress(t[down], ps[down])
             if fit.slope < 0:
-                k = int(np.searchsorted(t, -fit.intercept / fit.slope))
+                k = int(np.argmin(np.abs(t - (-fit.intercept / fit.slope))))
                 off = min(max(off, k), ps.size - 1)
     return a, off
 
