@@ -7,13 +7,17 @@ long-time hyperelastic stress plus one over-stress per Prony term,
     S(t) = S_inf(C(t)) + sum_i Q_i(t),
     dQ_i/dt + Q_i / tau_i = g_i dS_br/dt,
 
-where ``S_br`` is the stress of the branch law: the layer's own law
-``W = X1 (I1bar - 3) + X2 (I1bar - 3)^2 + K/2 (J - 1)^2`` (``branches="full"``,
-the default: every branch keeps the model's nu = 0.49, so the instantaneous
-response is exactly the elastic model at ``X1 (1 + sum g)``, and the scaling law
-``M(s X1, s p)`` holds at every rate), or its isochoric part only
-(``branches="isochoric"``: Simo's split; the bulk modulus then does not relax and
-the instantaneous Poisson ratio is lower).
+where ``S_br`` is what a branch carries. ``branches="full"`` (the default): the
+isochoric stress of the layer's law ``X1 (I1bar - 3) + X2 (I1bar - 3)^2`` as a
+tensor (Simo's), and the penalty's Kirchhoff pressure ``pi = K (J - 1) J`` as a
+scalar, whose stress ``pi C^-1`` stays hydrostatic in any configuration; every
+branch keeps the model's nu = 0.49, so the instantaneous response is exactly the
+elastic model at ``X1 (1 + sum g)``, and the scaling law ``M(s X1, s p)`` holds at
+every rate. ``branches="isochoric"``: the isochoric tensor only (the bulk modulus
+does not relax; the instantaneous Poisson ratio is lower). ``"whole_tensor"``: the
+whole stress, penalty included, as one reference-configuration tensor; kept as a
+warning: after a release the frozen penalty pressure is no longer hydrostatic, and
+the response departs from linear theory by 14-16 % of Uf (docs/viscoelasticity.md).
 
 Time discretisation (one implicit step ``t_n -> t_n+1 = t_n + dt``): ``S_br`` is
 taken linear in time over the step, and the convolution is integrated exactly for
@@ -26,10 +30,11 @@ second order in dt, and exact in both limits (``gamma_i -> g_i`` as
 ``dt/tau_i -> 0``; ``-> 0`` as ``dt/tau_i -> inf``). Within a step the stress is
 evaluated at the **fixed** history ``H = sum_i (e_i Q_i^n - gamma_i S_br^n)``:
 
-    P = P_inf(F; X (1 + Gamma)) + F H,      Gamma = sum_i gamma_i,
+    P = P_inf(F; X (1 + Gamma)) + F H + h F^-T,      Gamma = sum_i gamma_i,
 
 the long-time law with scaled moduli (the branch law is linear in its
-coefficients) plus the history's ``F H``, whose tangent is ``delta_ik H_LJ``. (The
+coefficients) plus the history's ``F H`` and ``h F^-T`` (h: the scalar history of
+the pressure), whose tangents are ``delta_ik H_LJ`` and ``-h F^-T_iL F^-T_kJ``. (The
 issue found FElupe's ``finite_strain_viscoelastic`` first order because it
 differentiates an energy through the internal variable; here no energy is
 differentiated.)
@@ -258,12 +263,14 @@ class ViscoelasticSuctionTest:
     prony : Prony or dict or pair, optional
         The spectrum: one shared by both layers, or ``{"dermis": ..., "hypodermis":
         ...}`` (a missing layer is elastic). None: elastic.
-    branches : {"full", "isochoric"}
-        What the branches carry: the whole law (default; nu = 0.49 at every rate)
-        or its isochoric part (the bulk modulus does not relax).
+    branches : {"full", "isochoric", "whole_tensor"}
+        What the branches carry: the isochoric tensor and the penalty's pressure as
+        a scalar (default; nu = 0.49 at every rate), the isochoric part only (the
+        bulk modulus does not relax), or the whole stress as one tensor (a warning,
+        see the module).
     x2d, x2h, t_d, t_h, probe_mm, bottom, mesh, prestretch
         As :class:`skinsuction.model.SuctionTest` (the fast engine only). X2 relaxes
-        with X1 (the branch carries the whole law). A pre-stretch is taken as
+        with X1. A pre-stretch is taken as
         relaxed at t = 0 (held for long before the test).
     """
 
@@ -466,7 +473,7 @@ def simulate_history(x1d, x1h, prony, times_s, pressures_mbar, probe_mm=6.0, x2d
         :func:`skinsuction.viscoelastic.mode1_history` and ``mode2_history``.
     probe_mm, x2d, x2h, t_d, t_h, bottom, mesh, prestretch
         As :func:`skinsuction.model.simulate`.
-    branches : {"full", "isochoric"}
+    branches : {"full", "isochoric", "whole_tensor"}
         What the branches relax (see :class:`ViscoelasticSuctionTest`).
     max_step_s : float, optional
         Largest time step (default: the given intervals).
