@@ -89,13 +89,18 @@ class OnDemandRays:
         Default :func:`default_cache_dir`; a subfolder per specification and FE code.
     workers : int
         Processes that solve the rays of one geometry.
+    progress : text stream or None
+        Where each solve is announced, with its time (default stderr): a
+        geometry's rays of every cause take minutes, and the user must see why.
     """
 
-    def __init__(self, spec, cache_dir=None, workers: int = 1):
+    def __init__(self, spec, cache_dir=None, workers: int = 1, progress="stderr"):
         import json
+        import sys
 
         self.spec = spec
         self.workers = max(1, int(workers))
+        self.progress = sys.stderr if progress == "stderr" else progress
         key = hashlib.sha256(json.dumps(spec.to_dict(), sort_keys=True).encode()
                              + _fe_code_hash().encode()).hexdigest()[:16]
         self.dir = Path(cache_dir or default_cache_dir()) / "rays" / key
@@ -173,8 +178,11 @@ class OnDemandRays:
     def _solve(self, path: Path, ids, td: float, th: float):
         from ._ray_solve import compute_bundle
 
+        import time
+
         log.info("solving %d FE rays on demand for t_d/a = %g, t_h/a = %g -> %s",
                  len(ids), td, th, path)
+        start = time.perf_counter()
         path.parent.mkdir(parents=True, exist_ok=True)
         args = (self.spec.pressures_mbar, self.spec.mesh, list(self.spec.fallback))
         if self.workers > 1:
@@ -188,6 +196,10 @@ class OnDemandRays:
         else:
             compute_bundle(ids, path, *args)
         self.solved += 1
+        if self.progress is not None:
+            print(f"solved on demand: {len(ids)} FE rays for t_d/a = {td:g}, t_h/a = {th:g} "
+                  f"({path.stem}) in {time.perf_counter() - start:.0f} s; cached in {path.parent}",
+                  file=self.progress, flush=True)
 
 
 @dataclass(frozen=True)
