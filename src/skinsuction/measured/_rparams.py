@@ -150,8 +150,9 @@ def ramp_parameters(curve):
 
     Columns (:data:`RAMP_COLUMNS`; deflections in mm from the cycle's baseline, as in
     :func:`r_parameters`): ``p_max_mbar`` the peak; ``rate_mbar_s`` the loading rate
-    (slope of the pressure between 10 % and 90 % of the peak); ``Umax`` the largest deflection of the cycle; ``Ures`` the
-    deflection when the suction is back at the off level; ``Uend`` at the end of the
+    (slope of the pressure between 10 % and 90 % of the peak); ``Umax`` the largest
+    deflection of the cycle; ``Ures`` the deflection when the suction is back at the off
+    level; ``Uend`` at the end of the
     off time; ``hysteresis_mbar_mm`` the area between the loading and unloading curves,
     ``-∮ d dp`` from onset to the off level (0 for an elastic solid, positive when
     unloading lags); ``hysteresis_fraction`` that area over the loading's

@@ -22,8 +22,9 @@ Phases
 The suction is found from the pressure alone, robust to its noise: the pressure is
 median-filtered (5 samples: a spike of one or two samples goes), its noise sd is
 taken from its second differences (a ramp has none), and a switch with hysteresis
-turns *on* above ``max(0.3 P, 6 sd)`` (``P`` the largest filtered pressure) and *off*
-at or below ``max(0.02 P, 3 sd, 1 mbar)``.  Each *on* stretch is a cycle:
+turns *on* above ``max(0.3 P, min(6 sd, 0.6 P))`` (``P`` the largest filtered
+pressure) and *off* at or below ``max(0.02 P, min(3 sd, 0.1 P), 1 mbar)``.  Each *on*
+stretch is a cycle:
 
 * ``rise``: from the suction onset (the first sample after the pressure last sat at
   the off level) to the first sample within ``max(0.03 x peak, 4 sd)`` of the
@@ -37,16 +38,17 @@ A cycle is a ``step`` (constant suction) if its rise and its release each take a
 10 % of it and at least 90 % of its hold lies in the band; a ``ramp`` if its rise and
 release each take at least 25 % of it and the pressure is linear in time along both
 (R^2 >= 0.95); else ``other``.  A ramp leaves the off level late (8 mbar at 25 mbar/s
-is 0.3 s), so its onset and its return to the off level are the samples nearest to where the
-lines fitted to its rise and its release (10-90 % of the peak) cross 0.  The protocol of a curve is ``"mode 1"`` (every cycle
-a step, their levels within 10 %), ``"mode 2"`` (every cycle a ramp) or ``"other"``.
+is 0.3 s), so its onset and its return to the off level are the samples nearest to
+where the lines fitted to its rise and its release (10-90 % of the peak) cross 0.  The
+protocol of a curve is ``"mode 1"`` (every cycle a step, their levels within 10 %),
+``"mode 2"`` (every cycle a ramp) or ``"other"``.
 
 Quantisation and noise
 ----------------------
 A Cutometer reads the deflection to 0.01 mm.  The loader finds the resolution ``q``
 (the smallest gap between distinct deflections, if every deflection is a whole
 multiple of it) and reports it (``TimeCurve.resolution_mm`` and a note).  The noise
-sd comes from third differences in time (:func:`skinsuction.noise.noise_from_differences`)
+sd comes from unit-norm third differences in time (those of :mod:`skinsuction.noise`)
 within each phase, after 0.1 s of settling, and is never below the sd of the rounding,
 ``q / sqrt(12)`` (2.9 µm at 0.01 mm): a reading is off the true curve by at least
 that, so a fit should not be asked to do better.  Steps of ``q`` are quantisation,
