@@ -1,7 +1,7 @@
 """The package's layers import one way, and no module imports itself back.
 
 Layers, lowest first (docs/workflow.md#layout): the shared helpers, the model,
-the simulated space, the figures (drawing plain tables), identify, diagnose,
+its viscoelastic extension, the simulated space, the figures (drawing plain tables), identify, diagnose,
 then the studies (paper, cohort) and the command line.  A module may import
 from its own layer and the layers below, never from above, so the forward
 model knows nothing of spaces and the paper's study is not needed to identify
@@ -20,6 +20,7 @@ LAYERS = [
     {"errors", "_files", "_threads", "_argtypes", "_progress", "provenance", "noise", "config",
      "measured"},
     {"model"},
+    {"viscoelastic"},
     {"space"},
     {"figures"},
     {"identify"},
