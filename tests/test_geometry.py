@@ -243,6 +243,28 @@ def test_rays_on_demand_are_the_fe_model_at_that_probe_and_layers(solver):
         assert np.allclose(rays[i, 0, :m.size], m, rtol=1e-9, atol=1e-12)
 
 
+def test_a_causes_rays_on_demand_are_the_fe_model_at_its_nodes_and_those_layers(solver):
+    from skinsuction.space import Cause
+
+    pre = Cause("pre_tension", "prestretch", "lambda0", "1", False, 1.0, (1.0, 1.1))
+    thick = Cause("hypodermis_thickness", "t_h", "t_h", "mm", False, 1.0, (1.0, 2.4))
+    p = np.asarray(SPEC.pressures_mbar)
+    rays, info = solver.rays(4.0, 1.5, 3.0, pre)
+    assert rays.shape == (2, 2, p.size) and info["rays"] == 4
+    neutral, _ = solver.rays(4.0, 1.5, 3.0)
+    assert np.array_equal(rays[:, :1], neutral)  # the neutral node is the neo-Hookean ray
+    c = simulate(0.01, 0.01 * SPEC.ratio_nodes[1], t_d=1.5, t_h=3.0, prestretch=1.1,
+                 probe_mm=4.0, pressures_mbar=p, mesh={"refinement": 0.5})
+    m = np.asarray(c.deflection_mm)
+    assert np.allclose(rays[1, 1, :m.size], m, rtol=1e-9, atol=1e-12)
+    # a thickness cause replaces that layer, scaled with the aperture like the others
+    rays, _ = solver.rays(4.0, 1.5, 3.0, thick)
+    c = simulate(0.01, 0.01 * SPEC.ratio_nodes[0], t_d=1.5, t_h=2.4, probe_mm=4.0,
+                 pressures_mbar=p, mesh={"refinement": 0.5})
+    m = np.asarray(c.deflection_mm)
+    assert np.allclose(rays[0, 1, :m.size], m, rtol=1e-9, atol=1e-12)
+
+
 def test_similar_geometries_share_the_cached_rays(solver):
     solved = solver.solved
     a, _ = solver.rays(4.0, 1.5, 3.0)
