@@ -351,3 +351,49 @@ if "diagnosis" in config:
                 "../envs/skinsuction.yaml"
             script:
                 "../scripts/detectability_map.py"
+
+    if "confusion_given_layers" in DG:
+        # Opt-in (not in the default target): every draw has its own dermis, and every
+        # candidate cause's rays are solved on demand at it, about 10 CPU-min a draw.
+        rule confusion_given_layers:
+            """The diagnosis with the dermis thickness given: confusion over the draws."""
+            input:
+                spaces=SF_SPACES,
+            output:
+                draws="results/diagnosis/confusion_given_layers_draws.csv",
+                matrix=report(
+                    "results/tables/diagnosis_confusion_given_layers_detectable.csv",
+                    caption="../report/detectability_given_layers.rst",
+                    category="Diagnosis",
+                    labels={"table": "confusion matrix, dermis given (detectable draws)"},
+                ),
+                rates="results/tables/diagnosis_confusion_given_layers_rates.csv",
+                png="results/figures/detectability_given_layers.png",
+                pdf="results/figures/detectability_given_layers.pdf",
+            log:
+                "logs/diagnosis/confusion_given_layers.log",
+            benchmark:
+                "results/benchmarks/diagnosis/confusion_given_layers.tsv"
+            params:
+                per_cause=DG["confusion_given_layers"]["per_cause"],
+                seed=DG["confusion_given_layers"].get("seed", 1000),
+                domain={
+                    "given_dermis_thickness": {
+                        "range": DG["confusion_given_layers"].get("dermis_range_mm", [0.5, 2.5]),
+                        "sd": DG["confusion_given_layers"].get("dermis_sd_mm", 0.1),
+                    },
+                    "probe_pairs": DG["confusion_given_layers"].get(
+                        "probe_pairs", [[2, 6], [4, 8]]),
+                },
+                on_demand_dir="results/simulated_space/on_demand",
+                decision=DG.get("decision", {}),
+                fit=DG.get("fit", {}),
+                code=code_hash("diagnose", "identify", "model", "figures", *SPACE_CODE),
+            threads: 2
+            resources:
+                mem_mb=3000,
+                runtime=1440,
+            conda:
+                "../envs/skinsuction.yaml"
+            script:
+                "../scripts/detectability_map.py"
