@@ -200,13 +200,22 @@ def _identify_arguments(p: argparse.ArgumentParser) -> None:
                         "built it under the working directory, else the default scale-free "
                         "space shipped with skinsuction; the space used is printed and "
                         "recorded in identification.json (space.source, space.description)")
-    p.add_argument("--objective", choices=("single", "weighted", "ratio"), required=True,
+    p.add_argument("--objective", choices=("single", "weighted", "ratio"), default=None,
                    help="single: one probe (paper eq. 4); weighted: the file's two probes "
                         "(2 and 6 mm, or e.g. 4 and 8), alpha on the smaller (eq. 10); ratio: "
-                        "larger / smaller probe's deflections (eqs. 11-12)")
-    p.add_argument("--probe", type=positive, default=6.0, metavar="MM",
+                        "larger / smaller probe's deflections (eqs. 11-12). Required for "
+                        "pressure ramps; not used for time curves (every curve is fitted "
+                        "jointly, or --probe)")
+    p.add_argument("--probe", type=positive, default=None, metavar="MM",
                    help="probe diameter in mm for --objective single, any of 1-12 mm "
-                        "(default 6; Cutometer probes are 2, 4, 6 and 8 mm)")
+                        "(default 6; Cutometer probes are 2, 4, 6 and 8 mm); for time "
+                        "curves, fit only this probe's curves")
+    p.add_argument("--terms", type=int, choices=(1, 2), default=1,
+                   help="time curves: Prony terms of the relaxation spectrum (default 1)")
+    p.add_argument("--phases", choices=("all", "on"), default="all",
+                   help="time curves: fit every point, with the fast path's model error per "
+                        "phase in the likelihood (all, default), or only while the suction "
+                        "is on (on)")
     p.add_argument("--alpha", type=unit_interval, default=0.5,
                    help="weight of the 2 mm curve for --objective weighted, "
                         "dimensionless in [0, 1] (default 0.5)")
@@ -235,10 +244,17 @@ def _identify_arguments(p: argparse.ArgumentParser) -> None:
 
 def _run_identify(args: argparse.Namespace) -> int:
     from skinsuction.identify.measured_fit import identify_measured, write_identification
+    from skinsuction.measured import is_time_curve_file
     from skinsuction.measured._geometry import thickness_from_args
 
+    if is_time_curve_file(args.measured):
+        return _run_identify_time(args)
+    if args.objective is None:
+        raise CLIError("the following arguments are required: --objective (single, weighted "
+                       "or ratio) for a pressure ramp")
     result = identify_measured(
-        args.measured, args.space, objective=args.objective, probe_mm=args.probe,
+        args.measured, args.space, objective=args.objective,
+        probe_mm=6.0 if args.probe is None else args.probe,
         alpha=args.alpha, repeats=args.repeats, seed=args.seed, bottom=args.bottom,
         curve=args.curve, noise_um=args.noise_um, level=args.level,
         thickness=thickness_from_args(args), solve_on_demand=not args.no_solve,
@@ -261,6 +277,56 @@ def _run_identify(args: argparse.Namespace) -> int:
         print(f"{100 * iv['level']:g} % intervals (profile likelihood, noise "
               f"{result['noise']['sd_um']:.2g} µm, {result['noise']['method']}): "
               f"X1d {interval_text(iv['X1d'])} MPa, X1h {interval_text(iv['X1h'])} MPa")
+    for w in result["warnings"]:
+        print(f"warning: {w}", file=sys.stderr)
+    print(f"space: {result['space'].get('description') or result['space'].get('path')}")
+    print(f"wrote {paths['json']}, {paths['png']}, {paths['pdf']}")
+    return EXIT_OK
+
+
+def _run_identify_time(args: argparse.Namespace) -> int:
+    """``identify`` on a time-curve file: X1d, X1h (long-time) and a Prony spectrum."""
+    from skinsuction.identify.time_curves import identify_time_file, write_time_identification
+    from skinsuction.measured._geometry import thickness_from_args
+
+    if args.objective is not None:
+        print("note: --objective is for pressure ramps; the time curves are fitted jointly",
+              file=sys.stderr)
+    repeats = 2 if args.repeats == 100 else args.repeats  # 100 is the ramp's default
+    result = identify_time_file(
+        args.measured, args.space, terms=args.terms,
+        probes=None if args.probe is None else [args.probe], curve=args.curve,
+        repeats=repeats, seed=args.seed, noise_um=args.noise_um, level=args.level,
+        phases=args.phases, thickness=thickness_from_args(args),
+        solve_on_demand=not args.no_solve, workers=args.workers)
+    try:
+        paths = write_time_identification(result, args.out)
+    except OSError as err:
+        raise CLIError(f"{args.out}: cannot write ({err.strerror or err})") from None
+    iv = result["intervals"]
+    spectrum = ", ".join(f"g_{k} = {g:.3g} {interval_text(iv[f'g_{k}'])}, tau_{k} = {t:.3g} s "
+                         f"{interval_text(iv[f'tau_{k}'])}"
+                         for k, (g, t) in enumerate(zip(result["g"], result["tau_s"]), 1))
+    q = result["fit_quality"]
+    print(f"X1d = {result['X1d']:.4g} MPa {interval_text(iv['X1d'])}, X1h = "
+          f"{result['X1h']:.4g} MPa {interval_text(iv['X1h'])} (long-time; "
+          f"{100 * iv['level']:g} % intervals, {iv['method'].split(' in ')[0]})")
+    print(f"spectrum: {spectrum}; instantaneous X1d = {result['X1d_instantaneous']:.4g} MPa, "
+          f"X1h = {result['X1h_instantaneous']:.4g} MPa")
+    for c in q["curves"]:
+        parts = ", ".join(f"{ph} {v['rms_um']:.2g} µm" for ph, v in c["phases"].items()
+                          if v["rms_um"] is not None)
+        print(f"{c['curve']} ({c['protocol']}): reduced chi2 {c['chi2'] / max(c['points'], 1):.3g}"
+              f"; RMS residual per phase: {parts}")
+    rows = result["r_parameters"]["mode1"]
+    if rows:
+        r = rows[0]
+        print(f"R parameters, first cycle: Ue {r['Ue']:.2f}, Uf {r['Uf']:.2f} mm, R2 "
+              f"{r['R2']:.2f}, R5 {r['R5']:.2f}, R6 {r['R6']:.2f}, R7 {r['R7']:.2f} "
+              f"({len(rows)} rows in identification.json)")
+    for r in result["r_parameters"]["mode2"][:1]:
+        print(f"ramp parameters: Umax {r['Umax']:.2f} mm, Ures {r['Ures']:.2f} mm, "
+              f"hysteresis {100 * r['hysteresis_fraction']:.2g} %")
     for w in result["warnings"]:
         print(f"warning: {w}", file=sys.stderr)
     print(f"space: {result['space'].get('description') or result['space'].get('path')}")

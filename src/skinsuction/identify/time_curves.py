@@ -1,0 +1,323 @@
+"""Identify X1d, X1h and a relaxation spectrum from Cutometer time curves.
+
+What ``skinsuction identify TIME_CURVES.csv`` runs: read the curves
+(:func:`skinsuction.measured.load_time_curves`), take the space at the subject's
+layers, fit the long-time moduli and one or two Prony terms with the fast path
+(:func:`skinsuction.identify._time_fit.fit_time_model`), put Laplace intervals on
+every parameter, flag edges, and report the R parameters beside them
+(:func:`identify_time_data`); write ``identification.json`` and a fit figure
+(:func:`write_time_identification`).
+
+Examples
+--------
+>>> from skinsuction.measured import load_time_curves
+>>> from skinsuction.space import load_space
+>>> r = identify_time_data(load_time_curves("data/example_mode1.csv"), load_space(),
+...                        terms=1, repeats=1)        # doctest: +SKIP
+>>> r["X1d"], r["g"], r["tau_s"]                      # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+from pathlib import Path
+
+import numpy as np
+
+from skinsuction._files import file_sha256
+from skinsuction.errors import InputError
+
+from ._time_fit import (
+    MODEL_ERROR,
+    TIME_WF,
+    fit_data_of,
+    fit_time_model,
+    laplace_intervals,
+    time_bound_flags,
+)
+from ._time_model import G_BOUNDS, TAU_BOUNDS_S
+from ._window_focusing import IdentificationError
+
+__all__ = ["identify_time_file", "identify_time_data", "write_time_identification"]
+
+PHASE_NAMES = ("rest", "on", "release", "off", "ramp")
+
+
+def _check(terms, repeats, seed, noise_um, level, phases):
+    if terms not in (1, 2):
+        raise InputError(f"--terms must be 1 or 2 Prony terms, not {terms}")
+    if int(repeats) < 1 or int(seed) < 0:
+        raise InputError("repeats must be >= 1 and seed >= 0")
+    if noise_um is not None and not noise_um > 0:
+        raise InputError(f"the noise sd must be positive, not {noise_um} µm")
+    if not 0 < level < 1:
+        raise InputError(f"the level must lie in (0, 1), not {level}")
+    if phases not in ("all", "on"):
+        raise InputError(f"phases must be 'all' or 'on', not {phases!r}")
+
+
+def identify_time_file(path, space_path=None, *, thickness=None, solve_on_demand=True,
+                       workers=1, **options) -> dict:
+    """:func:`identify_time_data` of a file (the space read from ``space_path``, the
+    default one if None); ``input.sha256`` filled in."""
+    from skinsuction.measured import load_time_curves
+    from skinsuction.space import load_space
+
+    data = load_time_curves(path)
+    space = load_space(space_path, solve_on_demand=solve_on_demand, workers=workers)
+    if space.rays is None:
+        raise InputError(f"{space.info['path']}: time curves need the scale-free space (its "
+                         "neo-Hookean rays), not a grid database")
+    result = identify_time_data(data, space, thickness=thickness, **options)
+    result["input"]["sha256"] = file_sha256(path)
+    return result
+
+
+def _select(data, probes, curve):
+    curves = list(data.curves)
+    if probes is not None:
+        want = [float(p) for p in probes]
+        curves = [c for c in curves if any(math.isclose(c.probe_mm, p, abs_tol=1e-6)
+                                           for p in want)]
+        missing = [p for p in want if not any(math.isclose(c.probe_mm, p, abs_tol=1e-6)
+                                              for c in curves)]
+        if missing:
+            raise InputError(f"{data.path}: no time curve of the {missing[0]:g} mm probe "
+                             f"(probes: {', '.join(f'{p:g}' for p in data.probes)} mm)")
+    if curve is not None:
+        curves = [c for c in curves if c.curve == str(curve)]
+        if not curves:
+            raise InputError(f"{data.path}: no time curve named {curve!r}")
+    if not curves:
+        raise InputError(f"{data.path}: no time curve to fit")
+    return curves
+
+
+def _rparams_records(curves, ue_time_s):
+    from skinsuction.measured import r_parameters, ramp_parameters
+
+    out = {"mode1": [], "mode2": []}
+    for c in curves:
+        try:
+            if c.protocol == "mode 1":
+                frame = r_parameters(c, ue_time_s=ue_time_s)
+                out["mode1"] += frame.to_dict(orient="records")
+            elif c.protocol == "mode 2":
+                out["mode2"] += ramp_parameters(c).to_dict(orient="records")
+        except ValueError as err:
+            out.setdefault("notes", []).append(f"{c.label}: {err}")
+    return out
+
+
+def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
+                       repeats: int = 2, seed: int = 0, noise_um: float | None = None,
+                       level: float = 0.95, phases: str = "all", thickness=None,
+                       ue_time_s: float = 0.1, window_focusing: dict | None = None) -> dict:
+    """Identify X1d, X1h (long-time) and ``terms`` Prony terms of loaded time curves.
+
+    Parameters
+    ----------
+    data : MeasuredTimeData
+    space : LoadedSpace
+        A scale-free space (:func:`skinsuction.space.load_space`).
+    terms : {1, 2}
+    probes : list of float, optional
+        The probes fitted (default: every curve of the file, jointly: one skin).
+    curve : str, optional
+        The replicate fitted (column ``curve``).
+    repeats, seed : int
+        Window focusing runs (seeds spawned from ``seed``), the best polished.
+    noise_um : float, optional
+        Noise sd of one deflection (default: the loader's, not below q/sqrt(12)).
+    level : float
+    phases : {"all", "on"}
+        Fit every point with the model-error sd per phase, or only those while the
+        suction is on.
+    thickness : dict, optional
+        Layer thicknesses overriding the file's header (:func:`geometry_of`).
+
+    Returns
+    -------
+    dict
+        JSON-able: ``X1d``, ``X1h`` (MPa, long-time), ``g``, ``tau_s`` (lists),
+        ``X1d_instantaneous``, ``X1h_instantaneous``, ``intervals``, ``at_bound``,
+        ``r_parameters``, ``fit_quality`` (chi^2 per curve and phase), ``fit``
+        (curves), ``noise``, ``likelihood``, ``space``, ``geometry``, ``settings``,
+        ``input``, ``provenance``, ``warnings``.
+    """
+    from skinsuction import __version__
+    from skinsuction.measured import geometry_of
+    from skinsuction.provenance import collect
+
+    _check(terms, repeats, seed, noise_um, level, phases)
+    geometry, warnings = geometry_of(data, **(thickness or {}))
+    warnings = list(getattr(data, "warnings", ())) + list(warnings)
+    space = space.at(geometry)
+    curves = _select(data, probes, curve)
+    warnings += [f"geometry: {a}" for a in geometry.assumptions()]
+    if any(v for v in (getattr(geometry, "sd", None) or {}).values()):
+        warnings.append("geometry: a thickness sd is not propagated into the intervals of "
+                        "time curves (the layers are taken as given)")
+    rays = {}
+    for c in curves:
+        rays[c.probe_mm] = space.probe(c.probe_mm).space
+    warnings += [f"geometry: {n}" for n in space.notes(sorted(rays))]
+    for c in curves:
+        if c.protocol not in ("mode 1", "mode 2"):
+            warnings.append(f"{c.label}: protocol {c.protocol}: the fast path's error is "
+                            "measured on mode 1 and mode 2 only")
+    fit_data = []
+    for c in curves:
+        try:
+            fit_data.append(fit_data_of(c, noise_sd_mm=None if noise_um is None
+                                        else 1e-3 * noise_um, phases=phases))
+        except ValueError as err:
+            raise InputError(f"{data.path}: {err}") from None
+    for c, d in zip(curves, fit_data):
+        spec = rays[c.probe_mm].spec
+        p_max = float(d.pressure_mbar.max())
+        if p_max > spec.reach_mbar():
+            k = int(np.argmax(d.pressure_mbar))
+            raise InputError(
+                f"{data.path}, line {int(c.lines[k]) if c.lines.size else 0}, column "
+                f"pressure_mbar: {c.label}: a suction of {p_max:g} mbar is beyond the reach "
+                f"of the scale-free space (p/X1d <= {spec.load_max:g} mbar/MPa up to X1d = "
+                f"{spec.x1d_range[1]:g} MPa: at most {spec.reach_mbar():g} mbar)")
+    wf = {**TIME_WF, **(window_focusing or {})}
+    try:
+        fit = fit_time_model(rays, fit_data, terms=terms, seed=seed, repeats=repeats,
+                             window_focusing_options=wf)
+    except IdentificationError as err:
+        raise InputError(f"{data.path}: beyond the simulated space: {err}") from None
+    params = fit.parameters
+    intervals = laplace_intervals(rays, fit_data, fit, level=level)
+    x1d_lo_key = "scale_free_space.load.max (the largest suction over load.max sets the " \
+                 "lowest X1d)"
+    flags = time_bound_flags(rays, fit_data, fit, [
+        (x1d_lo_key, "scale_free_space.x1d_mpa.max"),
+        ("scale_free_space.ratio", "scale_free_space.ratio")])
+    for name, f in flags.items():
+        if not f["at_bound"]:
+            continue
+        value = intervals[name]["estimate"]
+        if name in ("X1d", "X1h"):
+            where = ("the end of the simulated window" if f["edge"] == "window"
+                     else "the coverage frontier (the FE rays stop there: the suction "
+                          "exceeds the space's reach for this X1d)")
+            warnings.append(f"AT BOUND: {name} = {value:.4g} MPa sits at the {f['side']} edge "
+                            f"of the simulated space ({where}); widen it with "
+                            f"{f['config_key']}")
+        else:
+            warnings.append(f"AT BOUND: {name} = {value:.4g}{' s' if 'tau' in name else ''} "
+                            f"sits at the {f['side']} end of the spectrum's bounds (g "
+                            f"{G_BOUNDS[0]:g}-{G_BOUNDS[1]:g}, tau {TAU_BOUNDS_S[0]:g}-"
+                            f"{TAU_BOUNDS_S[1]:g} s): the data may want a value beyond it")
+    for name, iv in intervals.items():
+        if isinstance(iv, dict) and (iv.get("lower_open") or iv.get("upper_open")) \
+                and not flags.get(name, {}).get("at_bound"):
+            warnings.append(f"{name}: the data do not bound it within the space and the "
+                            f"spectrum's bounds ({iv['lower']:.3g}-{iv['upper']:.3g}, open)")
+    dt = min(float(np.median(np.diff(d.time_s))) for d in fit_data)
+    for k, tau in enumerate(params["tau_s"], start=1):
+        if tau < 2 * dt:
+            warnings.append(f"tau_{k} = {1e3 * tau:.3g} ms is shorter than two samples "
+                            f"({1e3 * dt:.3g} ms apart): it is seen only through the jump "
+                            "of the deflection, not resolved in time")
+    if intervals["misfit_scale"] > 1.5:
+        warnings.append(f"the residuals are {math.sqrt(intervals['misfit_scale']):.2g} times "
+                        "the noise and the fast path's model error: the model (or the "
+                        "number of Prony terms) misses the curve; the intervals are widened")
+    warnings += intervals["notes"]
+
+    quality, fitted = [], {}
+    for c, d, m, res, pc in zip(curves, fit_data, fit.fitted_mm, fit.residual_um,
+                                fit.phase_chi2):
+        rec = {"curve": c.label, "probe_mm": c.probe_mm, "protocol": c.protocol,
+               "points": int(d.n), "chi2": float(sum(v[0] for v in pc.values())),
+               "phases": {}}
+        for ph, (chi2, n) in pc.items():
+            sel = d.phase == ph
+            rec["phases"][ph] = {
+                "points": n, "chi2": chi2, "reduced_chi2": chi2 / n if n else None,
+                "rms_um": float(np.sqrt(np.mean(res[sel] ** 2))) if sel.any() else None,
+                "max_abs_um": float(np.max(np.abs(res[sel]))) if sel.any() else None,
+                "model_error_sd_um": 1e3 * MODEL_ERROR[ph] * d.scale_mm,
+                "fitted": bool(d.used[sel].any())}
+        quality.append(rec)
+        fitted[c.label] = {"probe_mm": c.probe_mm, "time_s": d.time_s.tolist(),
+                           "pressure_mbar": d.pressure_mbar.tolist(),
+                           "measured_mm": d.deflection_mm.tolist(),
+                           "fitted_mm": [float(v) if np.isfinite(v) else None for v in m],
+                           "residual_um": [float(v) if np.isfinite(v) else None for v in res],
+                           "phase": [str(v) for v in d.phase]}
+    spec = next(iter(rays.values())).spec
+    settings = {"terms": int(terms), "repeats": int(repeats), "seed": int(seed),
+                "phases": phases, "level": float(level), "window_focusing": wf,
+                "g_bounds": list(G_BOUNDS), "tau_bounds_s": list(TAU_BOUNDS_S),
+                "probes_mm": [c.probe_mm for c in curves], "curve": curve,
+                "ue_time_s": float(ue_time_s)}
+    return {
+        "kind": "time curves",
+        "skinsuction_version": __version__,
+        "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "model": {"name": "two-layer neo-Hookean, one Prony spectrum for both layers, fast "
+                          "path M_el(p_eff) on the scale-free space",
+                  "convention": "X1d, X1h long-time (equilibrium) moduli; instantaneous "
+                                "X1 (1 + sum g)", "terms": int(terms)},
+        "X1d": params["X1d"], "X1h": params["X1h"], "g": params["g"], "tau_s": params["tau_s"],
+        "X1d_instantaneous": params["X1d_instantaneous"],
+        "X1h_instantaneous": params["X1h_instantaneous"],
+        "intervals": intervals,
+        "at_bound": flags,
+        "r_parameters": _rparams_records(curves, ue_time_s),
+        "fit_quality": {"chi2": float(fit.chi2), "points": int(fit.n_points),
+                        "parameters": int(fit.n_params),
+                        "reduced_chi2": float(fit.chi2 / max(fit.n_points - fit.n_params, 1)),
+                        "curves": quality},
+        "noise": {"sd_um": [1e3 * d.noise_sd_mm for d in fit_data],
+                  "method": "given" if noise_um is not None else
+                  "the loader's (third differences in time, not below q/sqrt(12))",
+                  "resolution_mm": [c.resolution_mm for c in curves]},
+        "likelihood": {"sd": "sqrt(noise^2 + (model_error[phase] * U)^2), U the curve's "
+                             "largest deflection",
+                       "model_error_fraction": dict(MODEL_ERROR), "phases_fitted": phases,
+                       "pressure": [n for d in fit_data for n in d.notes]},
+        "space": {**space.info, "bottom": space.bottom, "kind": "scale_free",
+                  "x1d_range_mpa": list(spec.x1d_range), "load_max": spec.load_max,
+                  "reach_mbar": spec.reach_mbar(),
+                  "bounds_x1h_over_x1d": [float(spec.ratio_nodes[0]),
+                                          float(spec.ratio_nodes[-1])]},
+        "geometry": {**geometry.to_dict(), "notes": space.notes(sorted(rays))},
+        "settings": settings,
+        "input": {"path": str(data.path), "sha256": None, "metadata": dict(data.metadata),
+                  "curves": {c.label: {"first_line": c.first_line, "samples": len(c),
+                                       "protocol": c.protocol} for c in curves}},
+        "runs": fit.wf,
+        "fit": fitted,
+        "provenance": collect(config=settings),
+        "warnings": warnings,
+    }
+
+
+def write_time_identification(result: dict, out_dir) -> dict:
+    """Write ``identification.json`` and ``fit.png`` / ``fit.pdf`` (atomically)."""
+    import json
+
+    import matplotlib.pyplot as plt
+
+    from skinsuction._files import atomic_output
+    from skinsuction.figures import _style
+    from skinsuction.figures.time_fit import plot_time_fit
+
+    from .measured_fit import _strict_json
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"json": out / "identification.json", "png": out / "fit.png", "pdf": out / "fit.pdf"}
+    with atomic_output(paths["json"]) as tmp:
+        tmp.write_text(json.dumps(_strict_json(result), indent=2) + "\n", encoding="utf-8")
+    fig = plot_time_fit(result)
+    _style.save(fig, paths["png"], paths["pdf"])
+    plt.close(fig)
+    return paths
