@@ -27,7 +27,14 @@ RESULT_COLUMNS = (
     "E_um", "noise_um", "noise_method", "misfit_scale", "at_bound",
     "systematic_misfit", "misfit_p_value", "cause", "verdict", "ambiguous_with",
     "extra_parameter", "extra_unit", "extra_value", "extra_lower", "extra_upper",
-    "gain_E_ratio", "delta_bic", "warnings", "error", "seed", "seconds",
+    "gain_E_ratio", "delta_bic",
+    # time curves: the spectrum, the instantaneous moduli, the R parameters (mean over the
+    # cycles of the mode-1 curves) and the fit quality
+    "protocol", "prony_terms", "g_1", "g_1_lower", "g_1_upper", "tau_1_s", "tau_1_lower_s",
+    "tau_1_upper_s", "g_2", "tau_2_s", "x1d_instantaneous_mpa", "x1h_instantaneous_mpa",
+    "Ue", "Uv", "Uf", "Ur", "Ua", "R0", "R1", "R2", "R3", "R4", "R5", "R6", "R7", "R8", "R9",
+    "reduced_chi2",
+    "warnings", "error", "seed", "seconds",
 )
 
 MANIFESTS = ("manifest.csv", "manifest.yaml", "manifest.yml")
@@ -86,15 +93,91 @@ def discover(path, *, available_probes=None, pressure_range_mbar=None, range_not
             raise ValueError(f"{path}: no .csv files in the study folder")
     else:
         manifest, files = {}, [path]
+    from skinsuction.measured import is_time_curve_file
+
     out = []
     for f in files:
         rel = f.relative_to(path).as_posix() if path.is_dir() else f.name
         ids = {"file": rel, **manifest.get(rel, manifest.get(f.name, {}))}
         sha = _sha256(f)
+        if is_time_curve_file(f):
+            out.append((_time_entry(f, ids), sha))
+            continue
         for entry in load_table(f, ids=ids, available_probes=available_probes,
                                 pressure_range_mbar=pressure_range_mbar, range_note=range_note):
             out.append((entry, sha))
     return out
+
+
+def _time_entry(path, ids):
+    """A time-curve file as one measurement (its ``# key: value`` lines are ids); a
+    file of several subjects in one long table with ``time_s`` is not read (yet)."""
+    from skinsuction.measured import MeasuredDataError, StudyEntry, load_time_curves
+    from skinsuction.measured._geometry import SD_KEYS
+
+    geometry_keys = set(SD_KEYS) | set(SD_KEYS.values())
+    try:
+        data = load_time_curves(path)
+    except MeasuredDataError as err:
+        return StudyEntry(dict(ids), None, str(err), str(path))
+    meta = {k: v for k, v in data.metadata.items() if k not in geometry_keys}
+    return StudyEntry({**meta, **ids}, data, None, str(path))
+
+
+def _is_time_data(data) -> bool:
+    return bool(data.curves) and hasattr(data.curves[0], "time_s")
+
+
+def _analyse_time(row, entry, ctx, seed, t0):
+    """The row of a time-curve measurement: moduli, spectrum, R parameters."""
+    from skinsuction.identify.time_curves import identify_time_data, write_time_identification
+
+    data = entry.data
+    try:
+        ident = identify_time_data(data, ctx["space"], repeats=ctx["repeats"], seed=seed,
+                                   level=ctx["level"], terms=ctx.get("terms", 1))
+    except ValueError as err:
+        row["error"] = f"{entry.source}: {' '.join(str(err).split())}"
+        row["seconds"] = time.perf_counter() - t0
+        return row
+    iv = ident["intervals"]
+    g, tau = ident["g"], ident["tau_s"]
+    row.update({"objective": "time curves, joint", "x1d_mpa": ident["X1d"],
+                "x1h_mpa": ident["X1h"], "e_dermis_kpa": 6e3 * ident["X1d"],
+                "noise_um": float(np.mean(ident["noise"]["sd_um"])),
+                "noise_method": ident["noise"]["method"],
+                "misfit_scale": iv.get("misfit_scale"),
+                "correlation_x1d_x1h": (iv.get("correlation") or {}).get("X1d,X1h"),
+                "at_bound": ",".join(k for k, f in ident["at_bound"].items() if f["at_bound"]),
+                **_interval_columns("x1d", iv.get("X1d")),
+                **_interval_columns("x1h", iv.get("X1h")),
+                "e_dermis_lower_kpa": 6e3 * iv["X1d"]["lower"],
+                "e_dermis_upper_kpa": 6e3 * iv["X1d"]["upper"],
+                "protocol": ",".join(sorted({c.protocol for c in data.curves})),
+                "prony_terms": len(g), "g_1": g[0], "tau_1_s": tau[0],
+                "g_1_lower": iv["g_1"]["lower"], "g_1_upper": iv["g_1"]["upper"],
+                "tau_1_lower_s": iv["tau_1"]["lower"], "tau_1_upper_s": iv["tau_1"]["upper"],
+                "g_2": g[1] if len(g) > 1 else None, "tau_2_s": tau[1] if len(tau) > 1 else None,
+                "x1d_instantaneous_mpa": ident["X1d_instantaneous"],
+                "x1h_instantaneous_mpa": ident["X1h_instantaneous"],
+                "reduced_chi2": ident["fit_quality"]["reduced_chi2"]})
+    cycles = ident["r_parameters"]["mode1"]
+    for k in ("Ue", "Uv", "Uf", "Ur", "Ua", *(f"R{i}" for i in range(10))):
+        vals = [c[k] for c in cycles if c.get(k) is not None and np.isfinite(c[k])]
+        row[k] = float(np.mean(vals)) if vals else None
+    g_ = ident["geometry"]
+    row.update({"dermis_thickness_mm": g_["dermis_thickness_mm"],
+                "hypodermis_thickness_mm": g_["hypodermis_thickness_mm"],
+                "layers_given": ",".join(g_["given"])})
+    warnings = list(ident["warnings"])
+    if ctx.get("ray_spaces") is not None:
+        warnings.append("diagnosis: time curves are identified, not diagnosed, by study")
+    row["warnings"] = "; ".join(warnings)
+    row["seconds"] = time.perf_counter() - t0
+    if ctx.get("reports_dir") is not None:
+        write_time_identification(ident, Path(ctx["reports_dir"]) / f"{row['row']:05d}"
+                                  / "identification")
+    return row
 
 
 # ------------------------------------------------------------------ one measurement
@@ -137,6 +220,8 @@ def _analyse(job):
     data = entry.data
     row["probes_mm"] = ",".join(f"{p:g}" for p in data.probes)
     row["n_points"] = int(sum(len(c) for c in data.curves))
+    if _is_time_data(data):
+        return _analyse_time(row, entry, ctx, seed, t0)
     ident = diag = None
     try:
         kw = _objective_for(data)

@@ -412,19 +412,15 @@ def laplace_intervals(rays: dict, data: list, fit: TimeFit, *, level: float = 0.
             float(a[:2] @ theta[:2] + math.log10(1.0 + (10.0 ** theta[2::2]).sum()))
         half = math.sqrt(max(float(a @ cov @ a), 0.0) * q)
         lower, upper = centre - half, centre + half
-        lo_open = up_open = False
-        single = np.flatnonzero(a)
-        if single.size == 1:  # a coordinate of theta: cut at its bounds
-            i = int(single[0])
-            if lower <= lo[i]:
-                lower, lo_open = lo[i], True
-            if upper >= hi[i]:
-                upper, up_open = hi[i], True
-            if not ok[i]:
-                lo_open = up_open = True
-        else:
-            lo_open = bool(any(theta[i] - math.sqrt(cov[i, i] * q) <= lo[i] for i in single))
-            up_open = bool(any(theta[i] + math.sqrt(cov[i, i] * q) >= hi[i] for i in single))
+        # cut at the box of the space and the spectrum (the form's range over it)
+        b_lo = float(np.sum(np.minimum(a * lo, a * hi)))
+        b_hi = float(np.sum(np.maximum(a * lo, a * hi)))
+        if name.endswith("instantaneous"):
+            b_lo, b_hi = b_lo + centre - float(a @ theta), b_hi + centre - float(a @ theta)
+        lo_open, up_open = bool(lower <= b_lo), bool(upper >= b_hi)
+        lower, upper = max(lower, b_lo), min(upper, b_hi)
+        if not ok[np.flatnonzero(a)].all():
+            lo_open = up_open = True
         out[name] = {"estimate": 10.0 ** centre, "lower": 10.0 ** lower, "upper": 10.0 ** upper,
                      "lower_open": lo_open, "upper_open": up_open}
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
@@ -435,10 +431,6 @@ def laplace_intervals(rays: dict, data: list, fit: TimeFit, *, level: float = 0.
             va, vb = forms[a], forms[b]
             den = math.sqrt(max(va @ cov @ va, 0) * max(vb @ cov @ vb, 0))
             corr[f"{a},{b}"] = float(va @ cov @ vb / den) if den > 0 else None
-    if scale > 1.0:
-        notes.append(f"the residuals exceed the noise and model error (reduced chi2 "
-                     f"{fit.chi2 / max(n - d, 1):.3g}): the intervals are widened by "
-                     f"sqrt of it")
     return {"method": "Gauss-Newton (Laplace) approximation in log10 of each parameter, "
                       "coverage measured by benchmarks/time_identify.py",
             "level": float(level), **out, "correlation": corr, "chi2_min": float(fit.chi2),

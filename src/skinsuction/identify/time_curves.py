@@ -215,7 +215,7 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
                             f"{TAU_BOUNDS_S[1]:g} s): the data may want a value beyond it")
     for name, iv in intervals.items():
         if isinstance(iv, dict) and (iv.get("lower_open") or iv.get("upper_open")) \
-                and not flags.get(name, {}).get("at_bound"):
+                and not flags.get(name.replace("_instantaneous", ""), {}).get("at_bound"):
             warnings.append(f"{name}: the data do not bound it within the space and the "
                             f"spectrum's bounds ({iv['lower']:.3g}-{iv['upper']:.3g}, open)")
     dt = min(float(np.median(np.diff(d.time_s))) for d in fit_data)
@@ -224,7 +224,7 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
             warnings.append(f"tau_{k} = {1e3 * tau:.3g} ms is shorter than two samples "
                             f"({1e3 * dt:.3g} ms apart): it is seen only through the jump "
                             "of the deflection, not resolved in time")
-    if intervals["misfit_scale"] > 1.5:
+    if intervals["misfit_scale"] > 1.0:
         warnings.append(f"the residuals are {math.sqrt(intervals['misfit_scale']):.2g} times "
                         "the noise and the fast path's model error: the model (or the "
                         "number of Prony terms) misses the curve; the intervals are widened")
