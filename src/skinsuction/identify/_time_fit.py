@@ -14,10 +14,11 @@ The likelihood
 --------------
 Gaussian, independent points, the sd of a point
 
-    sd^2 = sigma^2 + (f_phase U)^2,
+    sd^2 = sigma^2 + (f_phase U)^2 + (0.002 M)^2 + (0.3 µm)^2,
 
 ``sigma`` the loader's noise sd (never below the 0.01 mm quantisation's
-q/sqrt(12)), ``U`` the curve's largest deflection and ``f_phase`` the fast path's
+q/sqrt(12)), ``M`` the measured deflection with the space's accuracy target as for
+ramps, ``U`` the curve's largest deflection and ``f_phase`` the fast path's
 measured error against FE time solves in that phase (:data:`MODEL_ERROR`,
 ``docs/viscoelasticity.md``: within 0.34 % of Uf while the suction is on, up to
 2.3 % in the 0.1 s after a release and 1.3 % in the off time).  ``phases="on"``
@@ -140,10 +141,15 @@ def fit_data_of(curve, *, noise_sd_mm: float | None = None, model_error: dict | 
     phase = _phases(curve)
     sigma = float(curve.noise_sd_mm if noise_sd_mm is None else noise_sd_mm)
     if not sigma > 0:
-        raise ValueError(f"{curve.label}: the noise sd must be positive")
+        raise ValueError(f"{curve.label}: the noise sd must be positive (the curve shows "
+                         "none: give it, --noise-um)")
     scale = float(np.percentile(np.abs(d), 99.5))
     f = np.array([fractions[k] for k in phase], dtype=float)
-    sd = np.sqrt(sigma ** 2 + (f * scale) ** 2)
+    # the space's own accuracy target (0.2 % of M and 0.3 µm), as for pressure ramps
+    from .measured_fit import MODEL_ERROR_MM, MODEL_ERROR_RELATIVE
+
+    sd = np.sqrt(sigma ** 2 + (f * scale) ** 2 + (MODEL_ERROR_RELATIVE * d) ** 2
+                 + MODEL_ERROR_MM ** 2 * (phase != "rest"))
     used = np.ones(d.size, bool) if phases == "all" else np.isin(phase, ["rest", "on", "ramp"])
     t = np.asarray(curve.time_s, dtype=float)
     return TimeFitData(curve.label, float(curve.probe_mm), t, p, d, sd, phase, sigma, scale,

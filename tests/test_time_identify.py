@@ -1,0 +1,144 @@
+"""Identification of time curves (issue 25, part 4): the fit core against FE time solves.
+
+The virtual experiments come from the FE time solve (``simulate_history``: internal
+variables, implicit steps), independent of the fast path that the fit uses.  They run
+on the default mesh, the mesh of the shipped space: on the coarse mesh the elastic
+curve itself differs from the space's by more than the noise, and the test would
+measure the mesh, not the method.
+"""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from skinsuction.cli import main
+from skinsuction.errors import InputError
+from skinsuction.identify._time_model import ElasticRays, effective_pressures, retardation
+from skinsuction.identify._time_virtual import mode1_suction, mode2_suction, virtual_curve, \
+    write_time_csv
+from skinsuction.identify.time_curves import identify_time_data
+from skinsuction.measured import load_time_curves
+from skinsuction.space import RayInterpolant, load_space
+from skinsuction.viscoelastic import Prony, effective_pressure
+
+X1D, RATIO, G, TAU = 0.1, 0.05, 0.4, 0.3
+FAST_WF = {"n_samples": 600, "max_iter": 40}
+
+
+@pytest.fixture(scope="module")
+def space():
+    return load_space()
+
+
+def _virtual_file(tmp_path, suction, name):
+    curves = []
+    for k, probe in enumerate((6.0, 2.0)):
+        t, p, d, _, _ = virtual_curve(X1D, X1D * RATIO, Prony([G], [TAU]), suction,
+                                      probe_mm=probe, seed=10 + k)
+        curves.append((probe, t, p, d))
+    return load_time_curves(write_time_csv(tmp_path / name, curves, ["synthetic: FE"]))
+
+
+def _covers(result, truth):
+    iv = result["intervals"]
+    return {k: bool(iv[k]["lower"] <= v <= iv[k]["upper"]) for k, v in truth.items()}
+
+
+TRUTH = {"X1d": X1D, "X1h": X1D * RATIO, "g_1": G, "tau_1": TAU}
+
+
+def test_creep_function_matches_prony_and_the_scalar_update():
+    rng = np.random.default_rng(3)
+    t = np.cumsum(rng.uniform(1e-3, 0.05, 200))
+    p = np.clip(np.cumsum(rng.normal(0, 20, 200)), 0, None)
+    for g, tau in (([0.3], [0.05]), ([0.5, 2.0], [0.01, 0.8])):
+        spec = np.log10(np.ravel(np.column_stack([g, tau])))[None, :]
+        c, lam = retardation(spec)
+        c_ref, lam_ref = Prony(g, tau).retardation()
+        assert np.allclose(c[0], c_ref, rtol=1e-10) and np.allclose(lam[0], lam_ref, rtol=1e-10)
+        ref = effective_pressure(Prony(g, tau), t, p)
+        assert np.max(np.abs(effective_pressures(spec, t, p)[0] - ref)) < 1e-9 * p.max()
+
+
+def test_elastic_rays_read_at_any_pressure_equal_the_space(space):
+    rays = space.probe(6).space
+    theta = np.array([[np.log10(0.08), np.log10(0.03)], [np.log10(0.2), np.log10(0.5)]])
+    pressures = np.array([37.0, 150.0, 399.0])
+    direct = ElasticRays(rays, 6.0, 400.0)(theta, np.tile(pressures, (2, 1)))
+    assert np.allclose(direct, RayInterpolant(rays, 6.0, pressures)(theta), rtol=1e-12)
+
+
+def test_mode1_fe_curve_recovered_within_the_intervals(space, tmp_path):
+    data = _virtual_file(tmp_path, mode1_suction(400.0, on_s=2.0, off_s=1.5, cycles=1),
+                         "mode1.csv")
+    assert data.curve(6).protocol == "mode 1"
+    r = identify_time_data(data, space, terms=1, repeats=1, seed=0, window_focusing=FAST_WF)
+    assert _covers(r, TRUTH) == {k: True for k in TRUTH}, r["intervals"]
+    assert abs(r["X1d"] / X1D - 1) < 0.05 and abs(r["g"][0] / G - 1) < 0.1
+    assert r["X1d_instantaneous"] == pytest.approx(r["X1d"] * (1 + r["g"][0]))
+    assert r["r_parameters"]["mode1"] and r["fit_quality"]["reduced_chi2"] < 1.5
+
+
+def test_mode2_fe_curve_recovered_within_the_intervals(space, tmp_path):
+    data = _virtual_file(tmp_path, mode2_suction(400.0, rate_mbar_s=200.0), "mode2.csv")
+    assert data.curve(6).protocol == "mode 2"
+    r = identify_time_data(data, space, terms=1, repeats=1, seed=0, window_focusing=FAST_WF)
+    cover = _covers(r, TRUTH)
+    assert cover["X1d"] and cover["g_1"] and cover["tau_1"], r["intervals"]
+    # X1h's Laplace interval is too narrow here (+-0.4 %, the fit 0.1 % off the truth):
+    # the under-coverage the benchmark measures (docs/time_identification.md); checked
+    # as a recovery only
+    assert abs(r["X1h"] / (X1D * RATIO) - 1) < 0.01
+    assert r["r_parameters"]["mode2"]
+
+
+def test_an_elastic_curve_is_not_given_a_spectrum(space, tmp_path):
+    """g = 0 in the FE: the fitted g is small or its interval reaches the lower bound."""
+    t, p, d, _, _ = virtual_curve(X1D, X1D * RATIO, Prony.elastic(),
+                                  mode1_suction(400.0, on_s=1.0, off_s=1.0, cycles=1),
+                                  probe_mm=6.0, seed=1)
+    data = load_time_curves(write_time_csv(tmp_path / "el.csv", [(6.0, t, p, d)]))
+    r = identify_time_data(data, space, terms=1, repeats=1, window_focusing=FAST_WF)
+    assert r["intervals"]["g_1"]["lower"] < 0.02
+
+
+def test_suction_beyond_the_space_is_a_located_error(space, tmp_path):
+    # a space whose reach is 400 mbar (X1d <= 0.02 MPa at p/X1d <= 20 000 mbar/MPa)
+    small = dataclasses.replace(space.rays, spec=dataclasses.replace(
+        space.rays.spec, x1d_range=(0.001, 0.02)))
+    from skinsuction.space import LoadedSpace
+
+    narrow = LoadedSpace(space.spaces, space.info, None, space.bottom, small, None, None)
+    p_of, switches, duration = mode1_suction(500.0, on_s=0.5, off_s=0.5, cycles=1)
+    t = np.round(np.arange(0, duration + 0.005, 0.01), 4)
+    d = 0.6 * (p_of(t) > 0) + np.random.default_rng(0).normal(0, 0.003, t.size)
+    path = write_time_csv(tmp_path / "high.csv", [(6.0, t, p_of(t), d)])
+    with pytest.raises(InputError, match=r"high\.csv, line \d+, column pressure_mbar: .*500 "
+                                         r"mbar is beyond the reach"):
+        identify_time_data(load_time_curves(path), narrow)
+    with pytest.raises(InputError, match="1 or 2 Prony terms"):
+        identify_time_data(load_time_curves(path), space, terms=3)
+    with pytest.raises(InputError, match="no time curve of the 2 mm probe"):
+        identify_time_data(load_time_curves(path), space, probes=[2.0])
+
+
+def test_identify_command_on_the_examples(tmp_path, capsys):
+    assert main(["identify", "data/example_mode1.csv", "--repeats", "1",
+                 "--out", str(tmp_path / "m1")]) == 0
+    out = capsys.readouterr().out
+    assert "X1d = " in out and "g_1 = " in out and "R parameters" in out
+    r = json.loads((tmp_path / "m1" / "identification.json").read_text())
+    assert r["kind"] == "time curves" and len(r["g"]) == len(r["tau_s"]) == 1
+    assert r["X1d_instantaneous"] == pytest.approx(r["X1d"] * (1 + r["g"][0]))
+    assert len(r["r_parameters"]["mode1"]) == 5 and r["provenance"]["versions"]
+    assert set(r["fit_quality"]["curves"][0]["phases"]) >= {"on", "release", "off"}
+    assert (tmp_path / "m1" / "fit.png").stat().st_size > 0
+    assert main(["identify", "data/example_mode2.csv", "--repeats", "1",
+                 "--out", str(tmp_path / "m2")]) == 0
+    r2 = json.loads((tmp_path / "m2" / "identification.json").read_text())
+    assert r2["r_parameters"]["mode2"] and r2["intervals"]["X1d"]["lower"] > 0
+    # a ramp without --objective: a usage error, not a traceback
+    assert main(["identify", "data/example_measured.csv", "--out", str(tmp_path / "x")]) == 2
+    assert "--objective" in capsys.readouterr().err
