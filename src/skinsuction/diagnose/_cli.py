@@ -94,6 +94,10 @@ def command(args: argparse.Namespace) -> int:
                         model_error_um=args.model_error_um, repeats=args.repeats,
                         seed=args.seed, holdout=not args.no_holdout,
                         level=args.level)
+    from skinsuction.measured import is_time_curve_file
+
+    if is_time_curve_file(args.measured):
+        return _time_command(args, settings)
     try:
         report = diagnose_file(args.measured, args.space_dir, settings,
                                thickness=thickness_from_args(args),
@@ -110,6 +114,31 @@ def command(args: argparse.Namespace) -> int:
         print(f"space: {space['description']}")
     print(report["summary"])
     print(f"baseline: {report['baseline']['description']}")
+    print(f"wrote {', '.join(str(p) for p in paths.values())}")
+    sys.stdout.flush()
+    return 0
+
+
+def _time_command(args, settings) -> int:
+    """``skinsuction diagnose`` of a time-curve file: is it creep?"""
+    from skinsuction.errors import InputError
+    from skinsuction.space import SpaceFileError, SpaceMissingError
+
+    from ._time import diagnose_time_file, write_time_report
+
+    try:
+        report = diagnose_time_file(args.measured, args.space_dir, settings,
+                                    thickness=thickness_from_args(args),
+                                    solve_on_demand=not args.no_solve, workers=args.workers)
+    except (SpaceMissingError, SpaceFileError) as err:
+        raise InputError(str(err)) from None
+    try:
+        paths = write_time_report(report, args.out)
+    except OSError as err:
+        raise InputError(f"{args.out}: cannot write ({err.strerror or err})") from None
+    for w in report["warnings"]:
+        print(f"warning: {w}", file=sys.stderr)
+    print(report["summary"])
     print(f"wrote {', '.join(str(p) for p in paths.values())}")
     sys.stdout.flush()
     return 0

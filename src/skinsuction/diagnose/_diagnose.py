@@ -431,6 +431,8 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     ranked = sorted(candidates, key=lambda c: c["bic"])
     runner_up = next((c for c in ranked if best is not None and c is not best), None)
 
+    from ._time import untestable_on_ramps  # _time imports Settings from here
+
     description = describe_residuals(base_test, _residual_dict(base, fd, False), sigma)
     report = {
         "input": {**(source or {}), "probes_mm": [float(p) for p in probes],
@@ -460,6 +462,8 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
                             "measured_mm": fd[p].deflection_mm.tolist(),
                             "sigma_um": fd[p].sigma_um} for p in probes},
         "candidates": candidates,
+        # causes that a pressure ramp cannot test, and why
+        "untestable": [untestable_on_ramps()],
         "cause": cause,
         "verdict": verdict,
         "beyond_space": beyond,
@@ -514,6 +518,13 @@ def _beyond_text(report: dict) -> str:
 
 def summary_text(report: dict) -> str:
     """The verdict in two or three plain sentences."""
+    s = _summary_text(report)
+    for u in report.get("untestable") or ():
+        s += f" Not tested: {u['cause']} ({u['reason'].split(':')[0]})."
+    return s
+
+
+def _summary_text(report: dict) -> str:
     b = report["baseline"]
     s = (f"Neo-Hookean fit: {_params_text(b['parameters'])}, E = {b['E_um']:.3g} µm "
          f"(noise {report['noise_um']:.2g} µm per point, {report['noise']['method']}). ")

@@ -39,7 +39,7 @@ from ._time_fit import (
 from ._time_model import G_BOUNDS, TAU_BOUNDS_S
 from ._window_focusing import IdentificationError
 
-__all__ = ["identify_time_file", "identify_time_data", "write_time_identification"]
+__all__ = ["identify_time_file", "identify_time_data", "prepare_time_fit", "write_time_identification"]
 
 PHASE_NAMES = ("rest", "on", "release", "off", "ramp")
 
@@ -110,6 +110,53 @@ def _rparams_records(curves, ue_time_s):
     return out
 
 
+def prepare_time_fit(data, space, *, probes=None, curve=None, noise_um=None, phases="all",
+                     thickness=None) -> dict:
+    """What a fit of loaded time curves needs, checked: shared by identify and diagnose.
+
+    Returns ``{"curves", "rays" (probe -> neo-Hookean RaySpace at the geometry),
+    "data" (TimeFitData per curve), "warnings", "geometry", "space" (at the
+    geometry)}``; raises :class:`InputError` for a suction beyond the space's reach.
+    """
+    from skinsuction.measured import geometry_of
+
+    geometry, warnings = geometry_of(data, **(thickness or {}))
+    warnings = list(getattr(data, "warnings", ())) + list(warnings)
+    space = space.at(geometry)
+    curves = _select(data, probes, curve)
+    warnings += [f"geometry: {a}" for a in geometry.assumptions()]
+    if any(v for v in (getattr(geometry, "sd", None) or {}).values()):
+        warnings.append("geometry: a thickness sd is not propagated into the intervals of "
+                        "time curves (the layers are taken as given)")
+    rays = {}
+    for c in curves:
+        rays[c.probe_mm] = space.probe(c.probe_mm).space
+    warnings += [f"geometry: {n}" for n in space.notes(sorted(rays))]
+    for c in curves:
+        if c.protocol not in ("mode 1", "mode 2"):
+            warnings.append(f"{c.label}: protocol {c.protocol}: the fast path's error is "
+                            "measured on mode 1 and mode 2 only")
+    fit_data = []
+    for c in curves:
+        try:
+            fit_data.append(fit_data_of(c, noise_sd_mm=None if noise_um is None
+                                        else 1e-3 * noise_um, phases=phases))
+        except ValueError as err:
+            raise InputError(f"{data.path}: {err}") from None
+    for c, d in zip(curves, fit_data):
+        spec = rays[c.probe_mm].spec
+        p_max = float(d.pressure_mbar.max())
+        if p_max > spec.reach_mbar():
+            k = int(np.argmax(d.pressure_mbar))
+            raise InputError(
+                f"{data.path}, line {int(c.lines[k]) if c.lines.size else 0}, column "
+                f"pressure_mbar: {c.label}: a suction of {p_max:g} mbar is beyond the reach "
+                f"of the scale-free space (p/X1d <= {spec.load_max:g} mbar/MPa up to X1d = "
+                f"{spec.x1d_range[1]:g} MPa: at most {spec.reach_mbar():g} mbar)")
+    return {"curves": curves, "rays": rays, "data": fit_data, "warnings": warnings,
+            "geometry": geometry, "space": space}
+
+
 def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
                        repeats: int = 2, seed: int = 0, noise_um: float | None = None,
                        level: float = 0.95, phases: str = "all", thickness=None,
@@ -147,43 +194,14 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
         ``input``, ``provenance``, ``warnings``.
     """
     from skinsuction import __version__
-    from skinsuction.measured import geometry_of
     from skinsuction.provenance import collect
 
     _check(terms, repeats, seed, noise_um, level, phases)
-    geometry, warnings = geometry_of(data, **(thickness or {}))
-    warnings = list(getattr(data, "warnings", ())) + list(warnings)
-    space = space.at(geometry)
-    curves = _select(data, probes, curve)
-    warnings += [f"geometry: {a}" for a in geometry.assumptions()]
-    if any(v for v in (getattr(geometry, "sd", None) or {}).values()):
-        warnings.append("geometry: a thickness sd is not propagated into the intervals of "
-                        "time curves (the layers are taken as given)")
-    rays = {}
-    for c in curves:
-        rays[c.probe_mm] = space.probe(c.probe_mm).space
-    warnings += [f"geometry: {n}" for n in space.notes(sorted(rays))]
-    for c in curves:
-        if c.protocol not in ("mode 1", "mode 2"):
-            warnings.append(f"{c.label}: protocol {c.protocol}: the fast path's error is "
-                            "measured on mode 1 and mode 2 only")
-    fit_data = []
-    for c in curves:
-        try:
-            fit_data.append(fit_data_of(c, noise_sd_mm=None if noise_um is None
-                                        else 1e-3 * noise_um, phases=phases))
-        except ValueError as err:
-            raise InputError(f"{data.path}: {err}") from None
-    for c, d in zip(curves, fit_data):
-        spec = rays[c.probe_mm].spec
-        p_max = float(d.pressure_mbar.max())
-        if p_max > spec.reach_mbar():
-            k = int(np.argmax(d.pressure_mbar))
-            raise InputError(
-                f"{data.path}, line {int(c.lines[k]) if c.lines.size else 0}, column "
-                f"pressure_mbar: {c.label}: a suction of {p_max:g} mbar is beyond the reach "
-                f"of the scale-free space (p/X1d <= {spec.load_max:g} mbar/MPa up to X1d = "
-                f"{spec.x1d_range[1]:g} MPa: at most {spec.reach_mbar():g} mbar)")
+    prep = prepare_time_fit(data, space, probes=probes, curve=curve, noise_um=noise_um,
+                            phases=phases, thickness=thickness)
+    curves, rays, fit_data, warnings = prep["curves"], prep["rays"], prep["data"], \
+        prep["warnings"]
+    geometry, space = prep["geometry"], prep["space"]
     wf = {**TIME_WF, **(window_focusing or {})}
     try:
         fit = fit_time_model(rays, fit_data, terms=terms, seed=seed, repeats=repeats,

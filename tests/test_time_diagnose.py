@@ -1,0 +1,83 @@
+"""The diagnosis of time curves (issue 25, part 4): creep named on FE creep, not on an
+elastic skin; a ramp says it cannot test creep.
+
+The virtual experiments are FE time solves (``simulate_history``, internal variables,
+implicit steps), independent of the fast path the diagnosis fits; the elastic one has a
+spectrum of negligible weight, so the FE path is the same.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from skinsuction.cli import main
+from skinsuction.diagnose import Settings
+from skinsuction.diagnose._time import VISCOELASTIC_CREEP, diagnose_time_data
+from skinsuction.identify._time_virtual import mode1_suction, virtual_curve, write_time_csv
+from skinsuction.measured import load_time_curves
+from skinsuction.space import load_space
+from skinsuction.viscoelastic import Prony
+
+FAST = Settings(repeats=1, window_focusing={"n_samples": 600, "n_best": 20,
+                                            "tolerance": 1e-6, "max_iter": 40})
+
+
+@pytest.fixture(scope="module")
+def space():
+    return load_space()
+
+
+def _file(tmp_path, g, tau, name, x1d=0.1, ratio=0.05):
+    suction = mode1_suction(400.0, on_s=2.0, off_s=1.5, cycles=1)
+    curves = []
+    for k, probe in enumerate((6.0, 2.0)):
+        t, p, d, _, _ = virtual_curve(x1d, x1d * ratio, Prony([g], [tau]), suction,
+                                      probe_mm=probe, seed=20 + k)
+        curves.append((probe, t, p, d))
+    return load_time_curves(write_time_csv(tmp_path / name, curves, ["synthetic: FE"]))
+
+
+def test_creep_is_named_with_its_spectrum_and_gain(space, tmp_path):
+    r = diagnose_time_data(_file(tmp_path, 0.4, 0.3, "creep.csv"), space, FAST)
+    assert r["named"] == VISCOELASTIC_CREEP and r["verdict"] == "cause_found"
+    p = r["viscoelastic"]["parameters"]
+    assert abs(p["g"][0] / 0.4 - 1) < 0.1 and abs(p["tau_s"][0] / 0.3 - 1) < 0.1
+    assert abs(p["X1d"] / 0.1 - 1) < 0.03
+    # the elastic model misses the creep and the slow recovery by many noise sd (3 µm);
+    # the spectrum brings every phase down to the noise and the 0.01 mm steps
+    for curve in r["gain"]["rms_um"].values():
+        assert curve["release"]["elastic"] > 3 * curve["release"]["viscoelastic"]
+        assert all(v["viscoelastic"] < 5.0 for v in curve.values())
+        assert all(v["elastic"] >= v["viscoelastic"] - 1e-9 for v in curve.values())
+    assert r["gain"]["delta_bic"] < -100 and r["elastic"]["misfit_p"] < 1e-6
+
+
+def test_an_elastic_skin_is_not_called_viscoelastic(space, tmp_path):
+    # g = 1e-4: the deflection moves by 1e-4 of itself, 0.05 µm, far below the 0.01 mm steps
+    r = diagnose_time_data(_file(tmp_path, 1e-4, 0.3, "elastic.csv"), space, FAST)
+    assert r["named"] == "none", r["summary"]
+    assert r["elastic"]["misfit_p"] > 0.01
+    assert abs(r["elastic"]["parameters"]["X1d"] / 0.1 - 1) < 0.03
+
+
+def test_a_ramp_diagnosis_says_creep_cannot_be_tested_there(tmp_path):
+    from skinsuction.diagnose import diagnose_file
+    from skinsuction.diagnose._diagnose import summary_text
+
+    report = diagnose_file("data/example_measured.csv", settings=Settings(holdout=False))
+    (u,) = report["untestable"]
+    assert u["cause"] == VISCOELASTIC_CREEP and "time curve" in u["reason"]
+    assert "Not tested: viscoelastic_creep" in summary_text(report)
+
+
+def test_the_command_diagnoses_the_mode1_example(tmp_path, capsys):
+    code = main(["diagnose", "data/example_mode1.csv", "--out", str(tmp_path), "--repeats", "1"])
+    out = capsys.readouterr().out
+    assert code == 0
+    report = json.loads((tmp_path / "report.json").read_text())
+    # the example creeps (Kelvin-Voigt terms of 10 ms and 0.5 s on an elastic jump)
+    assert report["named"] == VISCOELASTIC_CREEP and VISCOELASTIC_CREEP in out
+    for name in ("report.md", "fit.png", "fit.pdf"):
+        assert (tmp_path / name).stat().st_size > 0
+    assert np.isfinite(report["viscoelastic"]["parameters"]["tau_s"][0])
