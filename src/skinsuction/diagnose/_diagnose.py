@@ -431,7 +431,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     ranked = sorted(candidates, key=lambda c: c["bic"])
     runner_up = next((c for c in ranked if best is not None and c is not best), None)
 
-    from ._time import untestable_on_ramps  # _time imports Settings from here
+    from ._creep import untestable_on_ramps
 
     description = describe_residuals(base_test, _residual_dict(base, fd, False), sigma)
     report = {
