@@ -81,3 +81,28 @@ def test_the_command_diagnoses_the_mode1_example(tmp_path, capsys):
     for name in ("report.md", "fit.png", "fit.pdf"):
         assert (tmp_path / name).stat().st_size > 0
     assert np.isfinite(report["viscoelastic"]["parameters"]["tau_s"][0])
+
+
+def test_a_study_of_time_curves_has_r_parameters_spectrum_and_cause(tmp_path):
+    import shutil
+
+    import pandas as pd
+
+    folder = tmp_path / "study"
+    folder.mkdir()
+    for name in ("example_mode1.csv", "example_mode2.csv"):
+        shutil.copy(f"data/{name}", folder / name)
+    out = tmp_path / "out"
+    assert main(["study", str(folder), "--out", str(out), "--repeats", "1"]) == 0
+    rows = pd.read_parquet(out / "curves.parquet").sort_values("source")
+    assert len(rows) == 2 and rows["error"].isna().all()
+    mode1, mode2 = rows.iloc[0], rows.iloc[1]
+    assert mode1["protocol"] == "mode 1" and mode2["protocol"] == "mode 2"
+    # the mode-1 row carries the R parameters (the example's, as `rparams` prints them)
+    from skinsuction.measured import load_time_curves, r_parameters
+
+    r = r_parameters(load_time_curves("data/example_mode1.csv").curves[0])
+    assert mode1["R0"] == pytest.approx(r["R0"].mean()) and mode1["Ue"] > 0
+    for row in (mode1, mode2):
+        assert 0 < row["g_1"] and 0 < row["tau_1_s"] and row["x1d_mpa"] > 0
+        assert row["cause"] == VISCOELASTIC_CREEP  # both examples creep

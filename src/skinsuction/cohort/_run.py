@@ -170,13 +170,28 @@ def _analyse_time(row, entry, ctx, seed, t0):
                 "hypodermis_thickness_mm": g_["hypodermis_thickness_mm"],
                 "layers_given": ",".join(g_["given"])})
     warnings = list(ident["warnings"])
+    diag = None
     if ctx.get("ray_spaces") is not None:
-        warnings.append("diagnosis: time curves are identified, not diagnosed, by study")
+        from skinsuction.diagnose._time import diagnose_time_data
+
+        try:
+            diag = diagnose_time_data(data, ctx["space"], ctx["settings"].__class__(
+                **{**ctx["settings"].__dict__, "seed": seed}))
+            row.update({"systematic_misfit": bool(diag["decision"]["elastic_misfits"]),
+                        "misfit_p_value": diag["elastic"]["misfit_p"],
+                        "cause": diag["named"], "verdict": diag["verdict"],
+                        "delta_bic": diag["gain"]["delta_bic"]})
+        except ValueError as err:
+            warnings.append(f"diagnosis failed: {' '.join(str(err).split())}")
     row["warnings"] = "; ".join(warnings)
     row["seconds"] = time.perf_counter() - t0
     if ctx.get("reports_dir") is not None:
-        write_time_identification(ident, Path(ctx["reports_dir"]) / f"{row['row']:05d}"
-                                  / "identification")
+        out = Path(ctx["reports_dir"]) / f"{row['row']:05d}"
+        write_time_identification(ident, out / "identification")
+        if diag is not None:
+            from skinsuction.diagnose._time import write_time_report
+
+            write_time_report(diag, out / "diagnosis")
     return row
 
 
