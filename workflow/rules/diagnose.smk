@@ -13,6 +13,7 @@ DG = config["diagnosis"]
 if "scale_free_space" not in config:
     raise _config_error("diagnosis", "needs a scale_free_space section (the space it reads)")
 DG_MEASURED = dict(DG["measured"])
+DG_TIME = dict(DG.get("time_curves") or {})
 DG_CODE = code_hash("diagnose", "identify", *SPACE_CODE, "measured")
 DG_FIG_CODE = code_hash("paper", "diagnose", "identify", "figures", *SPACE_CODE, "measured")
 
@@ -45,6 +46,8 @@ DIAGNOSIS_OUTPUTS = [
     "results/figures/fig6_measured_vs_simulated.png",
     "results/figures/fig6_measured_vs_simulated.pdf",
     "results/tables/fig6_measured_vs_simulated.csv",
+    *expand("results/diagnosis/time/{tname}/{file}", tname=DG_TIME,
+            file=["report.json", "report.md", "fit.png"]),
 ]
 
 
@@ -125,3 +128,38 @@ rule diagnosis_fe_check:
         "../envs/skinsuction.yaml"
     script:
         "../scripts/diagnosis_fe_check.py"
+
+
+rule diagnose_time_curves:
+    """`skinsuction diagnose` of a time-curve file: viscoelastic creep or not."""
+    input:
+        measured=lambda w: DG_TIME[w.tname],
+        spaces=SF_SPACES,
+    output:
+        json="results/diagnosis/time/{tname}/report.json",
+        md="results/diagnosis/time/{tname}/report.md",
+        fit=report(
+            "results/diagnosis/time/{tname}/fit.png",
+            caption="../report/diagnosis_time.rst",
+            category="Diagnosis",
+            labels={"time curves": "{tname}", "file": "fit"},
+        ),
+        pdf="results/diagnosis/time/{tname}/fit.pdf",
+    log:
+        "logs/diagnosis/time_{tname}.log",
+    benchmark:
+        "results/benchmarks/diagnosis/diagnose_time_{tname}.tsv"
+    wildcard_constraints:
+        tname="|".join(map(re.escape, DG_TIME)) or "(?!)",
+    params:
+        decision=DG.get("decision", {}),
+        fit=DG.get("fit", {}),
+        code=code_hash("diagnose", "identify", "viscoelastic", *SPACE_CODE, "measured"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=30,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/diagnose_time_curves.py"
