@@ -92,7 +92,8 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
     """
     from skinsuction import __version__
     from skinsuction.identify import IdentificationError
-    from skinsuction.identify._time_fit import fit_time_model, laplace_intervals
+    from skinsuction.identify._time_fit import (fit_time_model, laplace_intervals,
+                                                time_bound_flags)
     from skinsuction.identify.time_curves import prepare_time_fit
     from skinsuction.provenance import collect
 
@@ -116,6 +117,20 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
     named = VISCOELASTIC_CREEP if (misfit and delta_bic <= settings.delta_bic) else "none"
     verdict = "cause_found" if named != "none" else "neo_hookean_fits"
     intervals = laplace_intervals(rays, fd, visco, level=settings.level)
+    keys = [("scale_free_space.load.max (the largest suction over load.max sets the lowest "
+             "X1d)", "scale_free_space.x1d_mpa.max"),
+            ("scale_free_space.ratio", "scale_free_space.ratio")]
+    at_bound = {}
+    for label, fit, js in (("elastic", elastic, el), ("viscoelastic", visco, ve)):
+        flags = time_bound_flags(rays, fd, fit, keys)
+        js["at_bound"] = flags
+        for name, fl in flags.items():
+            if fl["at_bound"]:
+                at_bound.setdefault(label, []).append(name)
+                warnings.append(f"AT BOUND: the {label} fit's {name} sits at the {fl['side']} "
+                                f"edge of the {'space' if name in ('X1d', 'X1h') else 'spectrum'}"
+                                f" ({fl['edge']}): widen {fl['config_key']}; its value is "
+                                "a bound, not an estimate")
     if named != "none" and ve["misfit_p"] < settings.alpha:
         warnings.append(f"the viscoelastic fit still misfits (chi^2 {ve['chi2']:.4g} on "
                         f"{ve['points']} points, p = {ve['misfit_p']:.2g}): creep explains "
@@ -141,6 +156,7 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
         "intervals": intervals,
         "decision": {"alpha": settings.alpha, "delta_bic": settings.delta_bic,
                      "elastic_misfits": bool(misfit)},
+        "at_bound": at_bound,
         "geometry": {**prep["geometry"].to_dict(),
                      "notes": prep["space"].notes(sorted(rays))},
         "input": {"path": str(data.path),
@@ -174,6 +190,9 @@ def time_summary_text(report: dict) -> str:
     lines.append(f"Viscoelastic fit: X1d = {p['X1d']:.4g} MPa, X1h = {p['X1h']:.4g} MPa "
                  f"(long-time), g = {p['g'][0]:.3g}, tau = {p['tau_s'][0]:.3g} s, chi^2/dof = "
                  f"{ve['reduced_chi2']:.3g}; BIC {report['gain']['delta_bic']:+.1f}.")
+    for label, names in (report.get("at_bound") or {}).items():
+        lines.append(f"AT BOUND: the {label} fit's {', '.join(names)} at an edge of the space "
+                     "or the spectrum (see the warnings): a bound, not an estimate.")
     if report["named"] == "none":
         lines.append("cause none: the elastic model explains the time curves (no creep "
                      "beyond the noise)" if not report["decision"]["elastic_misfits"] else
