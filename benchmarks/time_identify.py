@@ -10,15 +10,17 @@ probes, noise 3 µm, rounded to 0.01 mm.  Fitted (one term) by
 ``skinsuction.identify.time_curves`` on the shipped space, with both probes and with
 6 mm alone, with the model-error likelihood ("all") and suction-on points only
 ("on").  Prints median and 90th percentile |relative errors| and the coverage of the
-95 % intervals; writes ``benchmarks/out/time_identify.csv``.
+95 % intervals; writes ``benchmarks/out/time_identify.csv``.  The FE curves are kept
+in ``benchmarks/out/time_identify_fe/`` (one CSV per draw, named by the seed, the X1d
+range and the draw) and read from there on a rerun (``--no-cache`` solves them again):
+a change of the fit or of the intervals is measured on the same virtual experiments.
 
-    python benchmarks/time_identify.py [--draws 16] [--seed 0]
+    python benchmarks/time_identify.py [--draws 16] [--seed 0] [--no-cache]
 """
 
 from __future__ import annotations
 
 import argparse
-import tempfile
 import time
 from pathlib import Path
 
@@ -50,28 +52,34 @@ def main():
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--x1d-min", type=float, default=0.06)
     ap.add_argument("--x1d-max", type=float, default=0.15)
+    ap.add_argument("--no-cache", action="store_true",
+                    help="solve the FE curves again (not read from benchmarks/out)")
     args = ap.parse_args()
     rng = np.random.default_rng(args.seed)
     space = load_space()
     rows = []
-    tmp = Path(tempfile.mkdtemp())
+    cache = Path(__file__).parent / "out" / "time_identify_fe"
+    cache.mkdir(parents=True, exist_ok=True)
     for i in range(args.draws):
         x1d, ratio, g, tau = draw(rng, i, (args.x1d_min, args.x1d_max))
         truth = {"X1d": x1d, "X1h": x1d * ratio, "g_1": g, "tau_1": tau}
         t0 = time.perf_counter()
-        curves = []
-        try:
-            for k, probe in enumerate((6.0, 2.0)):
-                t, p, d, _, _ = virtual_curve(x1d, x1d * ratio, Prony([g], [tau]),
-                                              mode1_suction(), probe_mm=probe,
-                                              seed=args.seed * 1000 + 2 * i + k)
-                curves.append((probe, t, p, d))
-        except RuntimeError as err:
-            print(f"draw {i}: X1d {x1d:.3g} r {ratio:.3g}: FE failed ({err})")
-            rows.append({"draw": i, **truth, "fe_failed": True})
-            continue
+        path = cache / f"seed{args.seed}_x1d{args.x1d_min:g}-{args.x1d_max:g}_draw{i}.csv"
+        if args.no_cache or not path.exists():
+            curves = []
+            try:
+                for k, probe in enumerate((6.0, 2.0)):
+                    t, p, d, _, _ = virtual_curve(x1d, x1d * ratio, Prony([g], [tau]),
+                                                  mode1_suction(), probe_mm=probe,
+                                                  seed=args.seed * 1000 + 2 * i + k)
+                    curves.append((probe, t, p, d))
+            except RuntimeError as err:
+                print(f"draw {i}: X1d {x1d:.3g} r {ratio:.3g}: FE failed ({err})")
+                rows.append({"draw": i, **truth, "fe_failed": True})
+                continue
+            write_time_csv(path, curves, [f"truth: X1d {x1d!r} X1h/X1d {ratio!r} g {g!r} "
+                                          f"tau {tau!r}"])
         fe_s = time.perf_counter() - t0
-        path = write_time_csv(tmp / f"draw{i}.csv", curves)
         data = load_time_curves(path)
         for probes in ("both", "6"):
             for phases in ("all", "on"):
