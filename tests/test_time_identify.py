@@ -15,6 +15,14 @@ import pytest
 
 from skinsuction.cli import main
 from skinsuction.errors import InputError
+from skinsuction.identify._time_fit import (
+    _segments,
+    decorrelate_low_rank,
+    fit_data_of,
+    sandwich_covariance,
+    systematic_basis,
+    whitened_systematic,
+)
 from skinsuction.identify._time_model import ElasticRays, effective_pressures, retardation
 from skinsuction.identify._time_virtual import mode1_suction, mode2_suction, virtual_curve, \
     write_time_csv
@@ -68,6 +76,40 @@ def test_elastic_rays_read_at_any_pressure_equal_the_space(space):
     pressures = np.array([37.0, 150.0, 399.0])
     direct = ElasticRays(rays, 6.0, 400.0)(theta, np.tile(pressures, (2, 1)))
     assert np.allclose(direct, RayInterpolant(rays, 6.0, pressures)(theta), rtol=1e-12)
+
+
+def test_correlated_model_error_covariance():
+    """The systematic terms carry the fit's model-error variance (on average over each
+    segment of a phase), their Woodbury decorrelation gives the chi^2 of a dense solve,
+    and the sandwich covariance is the dense formula (the plain one without them)."""
+    curves = load_time_curves("data/example_mode1.csv").curves
+    fd = fit_data_of(curves[0])
+    B, D = systematic_basis(fd)
+    assert B.shape == (fd.n, 3 * 3 + 1)  # on, release, off x degrees 0-2; the space's
+    var, sd2, ph = (B ** 2).sum(axis=1) + D, fd.sd_mm[fd.used] ** 2, fd.phase[fd.used]
+    for name in ("on", "release", "off"):
+        for a, b in _segments(ph, name):
+            assert var[a:b].mean() == pytest.approx(sd2[a:b].mean(), rel=1e-9)
+    # the same coefficients in every cycle: a phase column repeats over the on segments
+    on = _segments(ph, "on")
+    assert np.allclose(B[on[0][0]:on[0][1], :-1], B[on[1][0]:on[1][1], :-1])
+    # two curves (the first two cycles as such), small enough for a dense solve
+    t = fd.time_s
+    first = [dataclasses.replace(fd, used=fd.used & (t < 6.0)),
+             dataclasses.replace(fd, label="b", used=fd.used & (t >= 6.0) & (t < 11.0))]
+    Bw, Dw = whitened_systematic(first)
+    n = sum(d.n for d in first)
+    assert Bw.shape == (n, 2 * 10) and Dw.shape == (n,) and np.all(Dw <= 1.0 + 1e-12)
+    dense = np.diag(Dw) + Bw @ Bw.T
+    rng = np.random.default_rng(4)
+    z = rng.normal(size=(3, n))
+    chi2 = np.sum(decorrelate_low_rank(z, Bw, Dw) ** 2, axis=1)
+    assert np.allclose(chi2, np.einsum("kn,kn->k", z, np.linalg.solve(dense, z.T).T),
+                       rtol=1e-9)
+    J = rng.normal(size=(n, 4))
+    H = np.linalg.inv(J.T @ J)
+    assert np.allclose(sandwich_covariance(J, Bw, Dw), H @ J.T @ dense @ J @ H, rtol=1e-9)
+    assert np.allclose(sandwich_covariance(J, 0 * Bw, np.ones(n)), H, rtol=1e-9)
 
 
 def test_mode1_fe_curve_recovered_within_the_intervals(space, tmp_path):

@@ -60,8 +60,10 @@ from ._time_model import (
 )
 from ._window_focusing import IdentificationError, window_focusing
 
-__all__ = ["MODEL_ERROR", "TIME_WF", "TimeFitData", "TimeFit", "TimeCurveModel",
-           "fit_data_of", "fit_time_model", "laplace_intervals", "time_bound_flags"]
+__all__ = ["MODEL_ERROR", "SYSTEMATIC_DEGREE", "TIME_WF", "TimeFitData", "TimeFit",
+           "TimeCurveModel", "decorrelate_low_rank", "fit_data_of", "fit_time_model",
+           "laplace_intervals", "sandwich_covariance", "systematic_basis", "time_bound_flags",
+           "whitened_systematic"]
 
 #: The fast path's model error as an sd, fraction of the curve's largest deflection,
 #: per phase: "on" (suction on), "release" (the first 0.1 s after a step's release),
@@ -97,6 +99,7 @@ class TimeFitData:
     used: np.ndarray  # bool: the point is in the likelihood
     breaks: np.ndarray = field(default=None)
     notes: tuple = ()
+    model_error: dict = field(default=None)  # the fractions per phase (MODEL_ERROR if None)
 
     @property
     def n(self) -> int:
@@ -153,7 +156,94 @@ def fit_data_of(curve, *, noise_sd_mm: float | None = None, model_error: dict | 
     used = np.ones(d.size, bool) if phases == "all" else np.isin(phase, ["rest", "on", "ramp"])
     t = np.asarray(curve.time_s, dtype=float)
     return TimeFitData(curve.label, float(curve.probe_mm), t, p, d, sd, phase, sigma, scale,
-                       used, pressure_breaks(t, p), (note,))
+                       used, pressure_breaks(t, p), (note,), fractions)
+
+
+#: The model error is systematic (smooth along the curve), not independent between
+#: points: in the intervals it is one smooth function per curve and phase, spanned by
+#: the Legendre polynomials of degree 0..SYSTEMATIC_DEGREE in time over each segment
+#: of that phase (the same coefficients in every cycle: the protocol repeats), each
+#: of variance (f_phase U)^2 / (degree + 1); the space's accuracy (0.002 M) is one
+#: term along the whole curve, as the ramps' space error (``space_error_direction``).
+SYSTEMATIC_DEGREE = 2
+
+
+def _segments(phase, name):
+    """[(start, stop)] of the runs of ``phase == name``."""
+    sel = np.concatenate([[False], phase == name, [False]]).astype(int)
+    edges = np.flatnonzero(np.diff(sel))
+    return list(zip(edges[0::2], edges[1::2]))
+
+
+def systematic_basis(data: TimeFitData, degree: int = SYSTEMATIC_DEGREE):
+    """``(B, D)`` of one curve's used points: the systematic covariance ``B B^T`` (B in
+    mm, one column per phase and Legendre degree, and one for the space's accuracy)
+    and the independent variance ``D`` (mm^2: the noise and the 0.3 µm floor).
+
+    Over a segment the mean of each column's square is (f_phase U)^2 / (degree + 1)
+    (each polynomial scaled to a mean square of 1 over the segment's points):
+    ``diag(B B^T) + D`` equals the fit's sd^2 on average over each segment.
+    """
+    from .measured_fit import MODEL_ERROR_MM, MODEL_ERROR_RELATIVE
+
+    fractions = {**MODEL_ERROR, **(data.model_error or {})}
+    t, ph = np.asarray(data.time_s, dtype=float), np.asarray(data.phase)
+    cols = []
+    for name in dict.fromkeys(ph):
+        f = float(fractions.get(name, 0.0))
+        if f <= 0:
+            continue
+        segs = _segments(ph, name)
+        for j in range(degree + 1):
+            c = np.zeros(t.size)
+            for a, b in segs:
+                x = (np.zeros(b - a) if b - a < 2 else
+                     2.0 * (t[a:b] - t[a]) / (t[b - 1] - t[a]) - 1.0)
+                v = np.polynomial.legendre.legval(x, np.eye(degree + 1)[j])
+                ms = float(np.mean(v ** 2))
+                c[a:b] = v / math.sqrt(ms) if ms > 0 else 0.0  # mean square 1 on the segment
+            cols.append(c * f * data.scale_mm / math.sqrt(degree + 1))
+    cols.append(MODEL_ERROR_RELATIVE * np.abs(np.asarray(data.deflection_mm, dtype=float)))
+    B = np.column_stack(cols)[data.used]
+    D = (data.noise_sd_mm ** 2 + MODEL_ERROR_MM ** 2 * (ph != "rest"))[data.used]
+    return B, D
+
+
+def whitened_systematic(data: list, degree: int = SYSTEMATIC_DEGREE):
+    """``(Bw, Dw)`` of all curves, whitened by the fit's sd (the rows of
+    :meth:`_Objective.whitened`): Bw block-diagonal over the curves."""
+    blocks = [systematic_basis(d, degree) for d in data]
+    k = sum(b.shape[1] for b, _ in blocks)
+    Bw, Dw, col = [], [], 0
+    for d, (b, dd) in zip(data, blocks):
+        sd = d.sd_mm[d.used]
+        m = np.zeros((b.shape[0], k))
+        m[:, col:col + b.shape[1]] = b / sd[:, None]
+        col += b.shape[1]
+        Bw.append(m)
+        Dw.append(dd / sd ** 2)
+    return np.vstack(Bw), np.concatenate(Dw)
+
+
+def decorrelate_low_rank(z, Bw, Dw):
+    """Residuals ``z`` (N, n) whitened by the fit's sd, decorrelated under the
+    covariance ``diag(Dw) + Bw Bw^T`` (in those units): the squared norm of each row
+    is ``z^T (diag(Dw) + Bw Bw^T)^-1 z`` (Woodbury through a thin SVD of
+    ``diag(Dw)^-1/2 Bw``; rank one: :func:`.measured_fit.decorrelate`)."""
+    z = np.atleast_2d(z) / np.sqrt(Dw)[None, :]
+    U, sv, _ = np.linalg.svd(Bw / np.sqrt(Dw)[:, None], full_matrices=False)
+    shrink = 1.0 - 1.0 / np.sqrt(1.0 + sv ** 2)
+    return z - np.einsum("nk,tk->nt", np.einsum("nt,tk->nk", z, U) * shrink, U)
+
+
+def sandwich_covariance(J, Bw, Dw):
+    """Covariance of the weighted least-squares estimate when the errors are
+    correlated: ``H^-1 J^T (diag(Dw) + Bw Bw^T) J H^-1``, H = J^T J, J the Jacobian
+    of the residuals whitened by the fit's sd."""
+    Hinv = np.linalg.pinv(J.T @ J)
+    JB = J.T @ Bw
+    meat = (J * Dw[:, None]).T @ J + JB @ JB.T
+    return Hinv @ meat @ Hinv
 
 
 class TimeCurveModel:
@@ -360,7 +450,7 @@ def _birge(chi2_min, dof, alpha=0.01) -> float:
 
 
 def laplace_intervals(rays: dict, data: list, fit: TimeFit, *, level: float = 0.95,
-                      step: float = 1e-4) -> dict:
+                      step: float = 1e-4, correlated: bool = True) -> dict:
     """Gauss-Newton (Laplace) intervals of every parameter of ``fit``.
 
     In theta (logs): ``theta_i +- sqrt(q s C_ii)``, C = (J^T J)^-1 from central
@@ -392,7 +482,11 @@ def laplace_intervals(rays: dict, data: list, fit: TimeFit, *, level: float = 0.
     notes = []
     ok = np.all(np.isfinite(J), axis=0)
     J = np.where(np.isfinite(J), J, 0.0)
-    cov = np.linalg.pinv(J.T @ J)
+    Bw, Dw = whitened_systematic(model.data)
+    cov = sandwich_covariance(J, Bw, Dw) if correlated else np.linalg.pinv(J.T @ J)
+    r0 = obj.whitened(theta[None, :])
+    chi2_corr = float(np.sum(decorrelate_low_rank(np.where(np.isfinite(r0), r0, 0.0),
+                                                  Bw, Dw) ** 2))
     if not ok.all():
         notes.append("some parameters sit where a step leaves the space: their intervals "
                      "are open on that side")
@@ -437,11 +531,19 @@ def laplace_intervals(rays: dict, data: list, fit: TimeFit, *, level: float = 0.
             va, vb = forms[a], forms[b]
             den = math.sqrt(max(va @ cov @ va, 0) * max(vb @ cov @ vb, 0))
             corr[f"{a},{b}"] = float(va @ cov @ vb / den) if den > 0 else None
-    return {"method": "Gauss-Newton (Laplace) approximation in log10 of each parameter, "
-                      "coverage measured by benchmarks/time_identify.py",
+    method = ("Gauss-Newton (Laplace) approximation in log10 of each parameter, the "
+              "covariance of the weighted least-squares estimate under a correlated model "
+              "error (sandwich: Legendre terms per curve and phase, the space's accuracy "
+              "along each curve), coverage measured by benchmarks/time_identify.py"
+              if correlated else "Gauss-Newton (Laplace) approximation in log10 of each "
+              "parameter, independent points, coverage measured by "
+              "benchmarks/time_identify.py")
+    return {"method": method,
             "level": float(level), **out, "correlation": corr, "chi2_min": float(fit.chi2),
             "delta_chi2_threshold": float(q), "misfit_scale": float(scale),
             "noise_dof": None, "n_points": int(n), "sd_log10": sd.tolist(),
+            "correlated_model_error": bool(correlated), "chi2_correlated": chi2_corr,
+            "systematic_terms": int(Bw.shape[1]),
             "notes": notes}
 
 
