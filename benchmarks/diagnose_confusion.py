@@ -115,26 +115,35 @@ def main(argv=None):
           f"{args.space_dir}, {args.workers} worker(s)", flush=True)
     t0 = time.perf_counter()
     rows = []
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    partial = out.with_suffix(".partial.csv")
+    # every draw is kept as it ends: a run given the dermis takes hours, and one cut
+    # off must not lose the draws it finished
+    every = 1 if args.given_dermis_sd is not None else 10
+
+    def done(i, row):
+        rows.append(row)
+        if i % every == 0:
+            pd.DataFrame(rows).to_csv(partial, index=False)
+            print(f"  {i}/{len(jobs)} ({time.perf_counter() - t0:.0f} s): {row.get('truth')} "
+                  f"named {row.get('named')}", flush=True)
+
     if args.workers > 1:
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(args.workers) as pool:
             for i, row in enumerate(pool.map(one_draw, jobs), 1):
-                rows.append(row)
-                if i % 10 == 0:
-                    print(f"  {i}/{len(jobs)} ({time.perf_counter() - t0:.0f} s)", flush=True)
+                done(i, row)
     else:
         for i, job in enumerate(jobs, 1):
-            rows.append(one_draw(job))
-            if i % 10 == 0:
-                print(f"  {i}/{len(jobs)} ({time.perf_counter() - t0:.0f} s)", flush=True)
+            done(i, one_draw(job))
     df = pd.DataFrame(rows)
     for col in ("cpu_seconds", "wall_seconds", "verdict", "detectable"):
         if col not in df:
             df[col] = float("nan")
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
     df.to_csv(out, index=False)
+    partial.unlink(missing_ok=True)
     plot_detectability(df, out.with_suffix(".png"))
 
     s = summarise(df, causes)
