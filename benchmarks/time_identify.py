@@ -9,8 +9,8 @@ solves (``simulate_history``, default mesh: the space's) under the 6 mm and 2 mm
 probes, noise 3 µm, rounded to 0.01 mm.  Fitted (one term) by
 ``skinsuction.identify.time_curves`` on the shipped space, with both probes and with
 6 mm alone, with the model-error likelihood ("all") and suction-on points only
-("on").  Prints median and 90th percentile |relative errors| and the coverage of the
-95 % intervals; writes ``benchmarks/out/time_identify.csv``.  The FE curves are kept
+("on").  Prints median and 90th percentile |relative errors|, the coverage of the
+95 % intervals and their median width (relative to the estimate); writes ``benchmarks/out/time_identify.csv``.  The FE curves are kept
 in ``benchmarks/out/time_identify_fe/`` (one CSV per draw, named by the seed, the X1d
 range and the draw) and read from there on a rerun (``--no-cache`` solves them again):
 a change of the fit or of the intervals is measured on the same virtual experiments.
@@ -97,6 +97,7 @@ def main():
                     row[f"est_{k}"] = est
                     row[f"err_{k}"] = est / truth[k] - 1
                     row[f"cover_{k}"] = bool(iv[k]["lower"] <= truth[k] <= iv[k]["upper"])
+                    row[f"width_{k}"] = (iv[k]["upper"] - iv[k]["lower"]) / est
                 rows.append(row)
                 print(f"draw {i} ({probes}, {phases}): X1d {x1d:.3g} r {ratio:.3g} g {g:.3g} "
                       f"tau {tau:.3g} s -> errors "
@@ -110,7 +111,7 @@ def main():
     print(f"\n{ok['draw'].nunique()} draws (of {args.draws}); |relative error| median / "
           "90th percentile, coverage of the 95 % intervals")
     print("| probes | likelihood | tau group | " + " | ".join(PARAMS) + " | coverage "
-          + " / ".join(PARAMS) + " |")
+          + " / ".join(PARAMS) + " | median width / estimate " + " / ".join(PARAMS) + " |")
     for (probes, phases), grp in ok.groupby(["probes", "phases"], sort=False):
         for name, sub in (("all", grp), ("5-20 ms", grp[grp["draw"] % 2 == 0]),
                           ("0.1-1 s", grp[grp["draw"] % 2 == 1])):
@@ -118,7 +119,8 @@ def main():
                 f"{100 * np.median(np.abs(sub[f'err_{k}'])):.2g} / "
                 f"{100 * np.percentile(np.abs(sub[f'err_{k}']), 90):.2g} %" for k in PARAMS)
             cov = " / ".join(f"{100 * sub[f'cover_{k}'].mean():.0f} %" for k in PARAMS)
-            print(f"| {probes} | {phases} | {name} | {errs} | {cov} |")
+            width = " / ".join(f"{100 * np.median(sub[f'width_{k}']):.2g} %" for k in PARAMS)
+            print(f"| {probes} | {phases} | {name} | {errs} | {cov} | {width} |")
     print(f"\nmedian time: FE {ok['fe_s'].median():.1f} s per draw (2 probes), fit "
           f"{ok['fit_s'].median():.1f} s")
 

@@ -18,7 +18,9 @@ from skinsuction.errors import InputError
 from skinsuction.identify._time_fit import (
     _segments,
     decorrelate_low_rank,
+    _grid_step,
     fit_data_of,
+    rounding_terms,
     sandwich_covariance,
     systematic_basis,
     whitened_systematic,
@@ -110,6 +112,45 @@ def test_correlated_model_error_covariance():
     H = np.linalg.inv(J.T @ J)
     assert np.allclose(sandwich_covariance(J, Bw, Dw), H @ J.T @ dense @ J @ H, rtol=1e-9)
     assert np.allclose(sandwich_covariance(J, 0 * Bw, np.ones(n)), H, rtol=1e-9)
+
+
+def _mean_rounding_error(x, q, s):
+    """E[round((x + e) / q) q] - x for e ~ N(0, s^2), summed over the grid's bins."""
+    from scipy.stats import norm
+
+    n = np.arange(np.floor(x.min() / q) - 12, np.ceil(x.max() / q) + 13)[:, None]
+    mass = norm.cdf(((n + 0.5) * q - x) / s) - norm.cdf(((n - 0.5) * q - x) / s)
+    return (n * q * mass).sum(axis=0) - x
+
+
+@pytest.mark.parametrize("beyond", [0.25, 0.4])
+def test_rounding_terms_are_the_covariance_of_the_mean_rounding_error(beyond):
+    """Over a uniformly random offset of the level against the 0.01 mm grid, the mean
+    rounding error (exact, from the normal CDF bin by bin) has the covariance the
+    rounding columns give (their Fourier series, 3 harmonics), and its variance is
+    taken off the independent noise."""
+    q, s = 0.01, beyond * 0.01
+    fd = fit_data_of(load_time_curves("data/example_mode1.csv").curves[0])
+    fd = dataclasses.replace(fd, resolution_mm=q, noise_sd_mm=float(np.hypot(s, q / np.sqrt(12))))
+    x = np.array([0.1234, 0.1271, 0.1302, 0.5555, 0.75])
+    cols, var = rounding_terms(fd, np.resize(x, fd.time_s.size))
+    cols = cols[:x.size]
+    offsets = np.arange(400) / 400 * q  # the integrand is periodic: the rectangle rule is exact
+    b = np.array([_mean_rounding_error(x + o, q, s) for o in offsets])
+    assert np.allclose(cols @ cols.T, b.T @ b / offsets.size, atol=1e-6 * q ** 2)
+    assert var == pytest.approx(np.mean(b ** 2), rel=1e-5)
+    # the variance moves from the independent part to the correlated one
+    B0, D0 = systematic_basis(fd)
+    B1, D1 = systematic_basis(fd, fitted_mm=np.resize(x, fd.time_s.size))
+    assert B1.shape[1] == B0.shape[1] + 6
+    assert np.allclose(D0 - D1, var)
+
+
+def test_grid_step_found_only_on_a_grid():
+    rng = np.random.default_rng(5)
+    on_grid = np.round(rng.uniform(0, 0.08, 300) / 0.01) * 0.01
+    assert _grid_step(on_grid) == pytest.approx(0.01)
+    assert _grid_step(on_grid + rng.normal(0, 1e-3, 300)) == 0.0
 
 
 def test_mode1_fe_curve_recovered_within_the_intervals(space, tmp_path):

@@ -100,6 +100,7 @@ class TimeFitData:
     breaks: np.ndarray = field(default=None)
     notes: tuple = ()
     model_error: dict = field(default=None)  # the fractions per phase (MODEL_ERROR if None)
+    resolution_mm: float = 0.0  # the deflection's rounding step (0: none)
 
     @property
     def n(self) -> int:
@@ -156,7 +157,21 @@ def fit_data_of(curve, *, noise_sd_mm: float | None = None, model_error: dict | 
     used = np.ones(d.size, bool) if phases == "all" else np.isin(phase, ["rest", "on", "ramp"])
     t = np.asarray(curve.time_s, dtype=float)
     return TimeFitData(curve.label, float(curve.probe_mm), t, p, d, sd, phase, sigma, scale,
-                       used, pressure_breaks(t, p), (note,), fractions)
+                       used, pressure_breaks(t, p), (note,), fractions,
+                       float(getattr(curve, "resolution_mm", None) or _grid_step(d)))
+
+
+def _grid_step(d) -> float:
+    """The step of the grid the deflections lie on (every value a whole multiple of
+    the smallest gap, to 2 %), 0 if none: the loader's resolution, which also asks for
+    a range of 20 steps, misses it on a small curve (0.08 mm at 0.01 mm: 2 mm probe)."""
+    values = np.unique(np.asarray(d, dtype=float))
+    if values.size < 3:
+        return 0.0
+    q = float(np.diff(values).min())
+    if q < 1e-6 or np.max(np.abs(values / q - np.round(values / q))) > 0.02:
+        return 0.0
+    return float(f"{q:.3g}")
 
 
 #: The model error is systematic (smooth along the curve), not independent between
@@ -167,6 +182,9 @@ def fit_data_of(curve, *, noise_sd_mm: float | None = None, model_error: dict | 
 #: term along the whole curve, as the ramps' space error (``space_error_direction``).
 SYSTEMATIC_DEGREE = 2
 
+#: Harmonics of the rounding's systematic part (see :func:`rounding_terms`).
+ROUNDING_HARMONICS = 3
+
 
 def _segments(phase, name):
     """[(start, stop)] of the runs of ``phase == name``."""
@@ -175,7 +193,33 @@ def _segments(phase, name):
     return list(zip(edges[0::2], edges[1::2]))
 
 
-def systematic_basis(data: TimeFitData, degree: int = SYSTEMATIC_DEGREE):
+def rounding_terms(data: TimeFitData, fitted_mm, harmonics: int = ROUNDING_HARMONICS):
+    """``(columns (n, 2 K), variance)`` of the rounding's systematic part at the
+    deflections ``fitted_mm`` (all points of the curve).
+
+    A deflection x read to a step q with Gaussian noise s before the rounding is off
+    on average by ``b(x) = sum_k (-1)^k q / (pi k) exp(-2 pi^2 k^2 s^2 / q^2)
+    sin(2 pi k x / q)``: a function of the level, so the same over a hold or a slow
+    creep (correlated), not averaged away by many samples.  With the level's phase on
+    the grid unknown, ``Cov(b(x_i), b(x_j)) = sum_k a_k^2 / 2 cos(2 pi k (x_i - x_j) / q)``:
+    two columns (cos, sin) per harmonic.  s is the noise beyond the rounding's
+    q^2 / 12 (0 when the curve shows no more: the whole sawtooth is then systematic).
+    """
+    q = float(data.resolution_mm or 0.0)
+    if q <= 0 or harmonics < 1:
+        return np.zeros((len(data.time_s), 0)), 0.0
+    s2 = max(data.noise_sd_mm ** 2 - q ** 2 / 12.0, 0.0)
+    x = np.nan_to_num(np.asarray(fitted_mm, dtype=float))
+    cols, var = [], 0.0
+    for k in range(1, harmonics + 1):
+        a = q / (math.pi * k) * math.exp(-2.0 * math.pi ** 2 * k ** 2 * s2 / q ** 2)
+        w = 2.0 * math.pi * k * x / q
+        cols += [a / math.sqrt(2.0) * np.cos(w), a / math.sqrt(2.0) * np.sin(w)]
+        var += a ** 2 / 2.0
+    return np.column_stack(cols), var
+
+
+def systematic_basis(data: TimeFitData, degree: int = SYSTEMATIC_DEGREE, fitted_mm=None):
     """``(B, D)`` of one curve's used points: the systematic covariance ``B B^T`` (B in
     mm, one column per phase and Legendre degree, and one for the space's accuracy)
     and the independent variance ``D`` (mm^2: the noise and the 0.3 µm floor).
@@ -204,15 +248,22 @@ def systematic_basis(data: TimeFitData, degree: int = SYSTEMATIC_DEGREE):
                 c[a:b] = v / math.sqrt(ms) if ms > 0 else 0.0  # mean square 1 on the segment
             cols.append(c * f * data.scale_mm / math.sqrt(degree + 1))
     cols.append(MODEL_ERROR_RELATIVE * np.abs(np.asarray(data.deflection_mm, dtype=float)))
+    noise2 = data.noise_sd_mm ** 2
+    if fitted_mm is not None:
+        rc, rvar = rounding_terms(data, fitted_mm)
+        cols += list(rc.T)
+        noise2 = max(noise2 - rvar, 0.0)
     B = np.column_stack(cols)[data.used]
-    D = (data.noise_sd_mm ** 2 + MODEL_ERROR_MM ** 2 * (ph != "rest"))[data.used]
+    D = (noise2 + MODEL_ERROR_MM ** 2 * (ph != "rest"))[data.used]
     return B, D
 
 
-def whitened_systematic(data: list, degree: int = SYSTEMATIC_DEGREE):
+def whitened_systematic(data: list, degree: int = SYSTEMATIC_DEGREE, fitted_mm=None):
     """``(Bw, Dw)`` of all curves, whitened by the fit's sd (the rows of
-    :meth:`_Objective.whitened`): Bw block-diagonal over the curves."""
-    blocks = [systematic_basis(d, degree) for d in data]
+    :meth:`_Objective.whitened`): Bw block-diagonal over the curves; with the
+    fitted curves, the rounding's systematic part too (:func:`rounding_terms`)."""
+    fitted_mm = fitted_mm if fitted_mm is not None else [None] * len(data)
+    blocks = [systematic_basis(d, degree, f) for d, f in zip(data, fitted_mm)]
     k = sum(b.shape[1] for b, _ in blocks)
     Bw, Dw, col = [], [], 0
     for d, (b, dd) in zip(data, blocks):
@@ -482,7 +533,7 @@ def laplace_intervals(rays: dict, data: list, fit: TimeFit, *, level: float = 0.
     notes = []
     ok = np.all(np.isfinite(J), axis=0)
     J = np.where(np.isfinite(J), J, 0.0)
-    Bw, Dw = whitened_systematic(model.data)
+    Bw, Dw = whitened_systematic(model.data, fitted_mm=fit.fitted_mm)
     cov = sandwich_covariance(J, Bw, Dw) if correlated else np.linalg.pinv(J.T @ J)
     r0 = obj.whitened(theta[None, :])
     chi2_corr = float(np.sum(decorrelate_low_rank(np.where(np.isfinite(r0), r0, 0.0),
