@@ -94,6 +94,8 @@ def main():
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--x1d-min", type=float, default=0.06)
     ap.add_argument("--x1d-max", type=float, default=0.15)
+    ap.add_argument("--classes", nargs="+", default=[VISCOELASTIC_CREEP, "none"],
+                    help="true classes drawn (e.g. none alone, for the false-alarm rate)")
     ap.add_argument("--out", default="benchmarks/out/diagnose_time_confusion.csv")
     args = ap.parse_args()
     space = load_space()
@@ -103,6 +105,8 @@ def main():
     for i in range(args.per_class):
         x1d, ratio, g, tau = draw(rng, i, (args.x1d_min, args.x1d_max))
         for truth, gg in ((VISCOELASTIC_CREEP, g), ("none", 1e-4)):
+            if truth not in args.classes:
+                continue
             seed = args.seed * 1000 + 2 * i + (truth == "none")
             try:
                 rows.append(one(space, truth, x1d, ratio, gg, tau, seed, tmp))
@@ -110,7 +114,7 @@ def main():
                 rows.append({"truth": truth, "seed": seed, "x1d": x1d, "ratio": ratio,
                              "g": gg, "tau_s": tau, "named": None,
                              "error": f"{type(err).__name__}: {err}"})
-            print(f"  {len(rows)}/{2 * args.per_class}: {rows[-1].get('named')} "
+            print(f"  {len(rows)}/{len(args.classes) * args.per_class}: {rows[-1].get('named')} "
                   f"({time.perf_counter() - start:.0f} s)", flush=True)
     df = pd.DataFrame(rows)
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
