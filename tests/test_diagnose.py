@@ -74,6 +74,26 @@ def test_noise_from_differences_is_unbiased_and_its_dof_is_right():
     assert noise_from_differences([(p, smooth)]).sd_um < 0.01  # the curve itself is removed
 
 
+def test_noise_dof_is_the_dense_formula_on_uneven_steps():
+    """The banded ||C C^T||_F^2 (and so the dof) equals the one of the full difference
+    matrix, and the weights span the null space that an SVD of the window's
+    Vandermonde matrix finds."""
+    from skinsuction.noise import difference_weights
+
+    rng = np.random.default_rng(7)
+    p = np.cumsum(rng.uniform(0.2, 3.0, 60))
+    c = difference_weights(p, 3)
+    for t in (0, 17, 56):
+        xs = p[t:t + 4]
+        _, _, vt = np.linalg.svd(np.vander(xs - xs.mean(), 3, increasing=True).T)
+        assert abs(abs(vt[-1] @ c[t]) - 1.0) < 1e-9
+    full = np.zeros((len(c), p.size))
+    np.put_along_axis(full, np.arange(len(c))[:, None] + np.arange(4), c, axis=1)
+    dense = len(c) ** 2 / float(((full @ full.T) ** 2).sum())
+    est = noise_from_differences([(p, np.sqrt(p))])
+    assert est.dof == pytest.approx(dense, rel=1e-12)
+
+
 def test_noise_from_replicates_pools_the_scatter():
     rng = np.random.default_rng(1)
     curve = np.linspace(0, 1, 40)

@@ -64,16 +64,29 @@ def difference_weights(x, order: int = 3) -> np.ndarray:
     n, k = x.size, int(order)
     if n < k + 1:
         return np.empty((0, k + 1))
-    rows = []
-    for t in range(n - k):
-        xs = x[t:t + k + 1]
-        xs = (xs - xs.mean()) / (np.ptp(xs) or 1.0)
-        V = np.vander(xs, k, increasing=True).T  # (k, k+1): annihilate 1, x, ... x^(k-1)
-        _, _, vt = np.linalg.svd(V)
-        c = vt[-1]
-        c *= np.sign(c[-1]) / np.linalg.norm(c)
-        rows.append(c)
-    return np.array(rows)
+    # k+1 points leave one weight vector: the k-th divided difference,
+    # c_j = 1 / prod_{i != j} (x_j - x_i), each window scaled to unit span first
+    idx = np.arange(n - k)[:, None] + np.arange(k + 1)
+    xs = x[idx]
+    span = np.ptp(xs, axis=1, keepdims=True)
+    xs = (xs - xs.mean(axis=1, keepdims=True)) / np.where(span > 0, span, 1.0)
+    diff = xs[:, :, None] - xs[:, None, :]
+    diff[:, np.arange(k + 1), np.arange(k + 1)] = 1.0
+    c = 1.0 / np.prod(diff, axis=2)
+    c *= np.sign(c[:, -1:]) / np.linalg.norm(c, axis=1, keepdims=True)
+    return c
+
+
+def _gram_frobenius2(c) -> float:
+    """``||C C^T||_F^2`` of the banded difference matrix whose row t is ``c[t]`` at
+    columns t .. t + k: only rows at most k apart overlap, so O(n k^2), not O(n^2)."""
+    n, w = c.shape
+    total = float(np.sum(np.sum(c * c, axis=1) ** 2))
+    for lag in range(1, min(w, n)):
+        # row t against row t + lag: c[t, lag:] . c[t + lag, :w - lag]
+        g = np.sum(c[:-lag, lag:] * c[lag:, :w - lag], axis=1)
+        total += 2.0 * float(np.sum(g ** 2))
+    return total
 
 
 def noise_from_differences(curves, order: int = 3) -> NoiseEstimate:
@@ -92,16 +105,13 @@ def noise_from_differences(curves, order: int = 3) -> NoiseEstimate:
         idx = np.arange(len(c))[:, None] + np.arange(order + 1)
         d = (c * np.asarray(m, dtype=float)[idx]).sum(axis=1)
         sq.append(d ** 2)
-        # C C^T of this curve (n_d x n_d), for the effective dof
-        full = np.zeros((len(c), len(p)))
-        np.put_along_axis(full, idx, c, axis=1)
-        blocks.append(full @ full.T)
+        blocks.append(_gram_frobenius2(c))  # ||C C^T||_F^2 of this curve, for the dof
     if not sq:
         raise ValueError(f"the curves are too short to estimate the noise "
                          f"(need > {order} points)")
     sq = np.concatenate(sq)
     n_d = sq.size
-    frob = sum(float((b ** 2).sum()) for b in blocks)
+    frob = sum(blocks)
     dof = n_d ** 2 / frob
     sd_um = 1e3 * math.sqrt(sq.mean())
     return NoiseEstimate(sd_um, "differences", dof,
