@@ -213,6 +213,56 @@ def test_a_given_thickness_sd_is_a_nuisance_the_fit_recovers():
     assert fit.chi2 == pytest.approx(((1.42 - 1.3) / 0.1) ** 2, rel=0.05)
 
 
+def test_a_cause_solved_at_the_given_layers_moves_with_the_thickness_by_its_own_rays():
+    """Under pre-tension the dermis changes the deflection otherwise than without it:
+    the cause's thickness brackets are its own rays at +-1 sd, and the fit recovers
+    both the cause and the thickness, where the neo-Hookean brackets cannot."""
+    from skinsuction.diagnose import FitData, fit_model
+    from skinsuction.space import RayInterpolant
+
+    spec = RaySpec([6], [0.01, 0.1], load_max=100.0, load_steps=8)
+    q = np.linspace(0.0, 1.0, 9)
+    base = np.stack([q, q ** 1.6])[:, None, :]
+    pre = default_registry()["pre_tension"]
+    nodes = np.asarray(pre.nodes)
+
+    def layered(t_d, c):  # the thickness's effect shrinks and turns with the pre-stretch
+        c = np.asarray(c, dtype=float)[None, :, None]
+        return (base * (1 - 1.5 * (c - 1) * q) * (1 + 0.8 * (t_d - 1.3) * np.sin(np.pi * q)
+                                                  * (1 - 8 * (c - 1))))
+
+    class Solver:
+        def rays(self, p, t_d, t_h, cause=None):
+            c = [1.0] if cause is None else nodes
+            return layered(t_d, c), {"rays": 2 * len(c), "stopped_early": 0, "cache": "-"}
+
+    spaces = {BASELINE: RaySpace(None, spec, np.array([np.nan]), {6.0: base}),
+              "pre_tension": RaySpace(pre, spec, nodes, {6.0: layered(1.0, nodes)})}
+    g = Geometry(1.3, 1.0, given=("t_d",), sd={"t_d": 0.1})
+    out, notes = spaces_at(spaces, [6.0], g, Solver())
+    (n,) = out["pre_tension"].nuisance
+    assert n.center.cause is pre and np.allclose(n.minus.rays(6.0), layered(1.2, nodes))
+    assert out[BASELINE].nuisance[0].center.cause is None
+    assert any("its own rays at ±1 sd" in x for x in notes)
+    # a curve at lambda0 = 1.1 on a dermis of 1.42 mm (1.2 sd above the given 1.3)
+    p = np.linspace(2.0, 40.0, 12)
+    truth = RaySpace(pre, spec, nodes, {6.0: layered(1.42, nodes)})
+    theta = np.array([[math.log10(0.5), math.log10(0.05), pre.to_axis(1.1)]])
+    m = RayInterpolant(truth, 6.0, p)(theta)[0]
+    data = {6.0: FitData(6.0, p, m, 1e-4)}
+    fit = fit_model(out["pre_tension"], data, seed=1)
+    assert fit.parameters["lambda0"] == pytest.approx(1.1, abs=0.005)
+    assert fit.parameters["t_d"] == pytest.approx(1.42, abs=0.01)
+    # the same fit with the neo-Hookean brackets (the design before) misfits
+    from dataclasses import replace as _replace
+
+    borrowed = _replace(n, center=out[BASELINE], minus=out[BASELINE].nuisance[0].minus,
+                        plus=out[BASELINE].nuisance[0].plus)
+    out["pre_tension"].nuisance = (borrowed,)
+    worse = fit_model(out["pre_tension"], data, seed=1)
+    assert worse.chi2 > 100 * max(fit.chi2, 1.0)
+
+
 def test_without_a_solver_a_missing_probe_or_layer_is_refused_by_name():
     spaces = _toy_spaces()
     with pytest.raises(GeometryOutsideSpace, match="5 mm probe"):

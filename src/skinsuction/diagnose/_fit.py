@@ -86,9 +86,10 @@ class ModelCurves:
     :class:`skinsuction.space.ThicknessNuisance`) adds one coordinate per
     thickness to theta: its offset ``delta`` in sd units, searched in
     ``[-NUISANCE_RANGE, NUISANCE_RANGE]`` with a standard normal prior (the
-    objective adds ``delta**2`` to chi^2).  The model's curve moves with it as the
-    neo-Hookean curve does at the same (X1d, X1h): by the quadratic through the
-    neo-Hookean curves at -1, 0 and +1 sd.
+    objective adds ``delta**2`` to chi^2).  The model's curve moves with it by the
+    quadratic through its brackets' curves at -1, 0 and +1 sd: the model's own
+    (a cause solved at the given layers) or, else, the neo-Hookean ones at the same
+    (X1d, X1h).
     """
 
     def __init__(self, space: RaySpace, data: dict):
@@ -112,8 +113,10 @@ class ModelCurves:
         out = {p: f(own) for p, f in self.interp.items()}
         for j, brackets in enumerate(self._brackets):
             delta = theta[:, self.n_model + j][:, None]
+            # a cause's own brackets are read at its coordinate too
+            at = own if self.nuisance[j].center.cause is not None else own[:, :2]
             for p, (center, minus, plus) in brackets.items():
-                m0, lo, hi = center(own[:, :2]), minus(own[:, :2]), plus(own[:, :2])
+                m0, lo, hi = center(at), minus(at), plus(at)
                 out[p] = out[p] + delta * (hi - lo) / 2 + delta ** 2 * (hi + lo - 2 * m0) / 2
         return out
 
