@@ -96,10 +96,12 @@ rule diagnose_measured:
         code=DG_FIG_CODE,
         # rays of a probe or layers the space lacks, solved on demand, kept here
         on_demand_dir="results/simulated_space/on_demand",
-    threads: 1
+    # a file with its own layers solves its causes' rays at them and at +-1 sd of a
+    # given thickness: about 1 300 CPU-s for two probes, in this many processes
+    threads: 2
     resources:
         mem_mb=3000,
-        runtime=30,
+        runtime=60,
     conda:
         "../envs/skinsuction.yaml"
     script:

@@ -1,10 +1,11 @@
 """Rule diagnose_measured: `skinsuction diagnose` of one measured file of the config."""
 
-# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
-# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
+# One BLAS/OpenMP thread, before NumPy is imported (the Snakemake preamble does not
+# import it; skinsuction's __init__ is lazy): the job's threads are the processes
+# that solve rays on demand.
 from skinsuction._threads import limit_threads
 
-limit_threads(snakemake.threads)
+limit_threads(1)
 
 import logging  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -18,7 +19,8 @@ with log_to_file(snakemake.log[0]):
     spaces = {s.name: s for s in map(read_ray_space, snakemake.input.spaces)}
     settings = Settings.from_config(snakemake.params.decision, snakemake.params.fit)
     # a probe or layers the space lacks: its rays solved once, kept with the results
-    solver = OnDemandRays(spaces[BASELINE].spec, cache_dir=snakemake.params.on_demand_dir)
+    solver = OnDemandRays(spaces[BASELINE].spec, cache_dir=snakemake.params.on_demand_dir,
+                          workers=snakemake.threads)
     report = diagnose_file(snakemake.input.measured, Path(snakemake.input.spaces[0]).parent,
                            settings, spaces=spaces, on_demand=solver)
     write_report(report, Path(snakemake.output.json).parent)
