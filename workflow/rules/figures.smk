@@ -354,7 +354,8 @@ if "diagnosis" in config:
 
     if "confusion_given_layers" in DG:
         # Opt-in (not in the default target): every draw has its own dermis, and every
-        # candidate cause's rays are solved on demand at it, about 10 CPU-min a draw.
+        # candidate cause's rays are solved on demand at it and at +-1 sd of it, about
+        # 45 CPU-min a draw.
         rule confusion_given_layers:
             """The diagnosis with the dermis thickness given: confusion over the draws."""
             input:
@@ -392,7 +393,7 @@ if "diagnosis" in config:
             threads: 2
             resources:
                 mem_mb=3000,
-                runtime=1440,
+                runtime=2880,
             conda:
                 "../envs/skinsuction.yaml"
             script:
