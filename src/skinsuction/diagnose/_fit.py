@@ -110,13 +110,17 @@ class ModelCurves:
     def __call__(self, theta) -> dict:
         theta = np.asarray(theta, dtype=float)
         own = theta[:, :self.n_model]
-        out = {p: f(own) for p, f in self.interp.items()}
+        model = {p: f(own) for p, f in self.interp.items()}
+        out = dict(model)
         for j, brackets in enumerate(self._brackets):
             delta = theta[:, self.n_model + j][:, None]
-            # a cause's own brackets are read at its coordinate too
-            at = own if self.nuisance[j].center.cause is not None else own[:, :2]
+            n = self.nuisance[j]
+            # a cause's own brackets are read at its coordinate too; brackets centred
+            # on this model's own space have its curve as their centre
+            at = own if n.center.cause is not None else own[:, :2]
             for p, (center, minus, plus) in brackets.items():
-                m0, lo, hi = center(at), minus(at), plus(at)
+                m0 = model[p] if n.center is self.space else center(at)
+                lo, hi = minus(at), plus(at)
                 out[p] = out[p] + delta * (hi - lo) / 2 + delta ** 2 * (hi + lo - 2 * m0) / 2
         return out
 
