@@ -411,7 +411,7 @@ def _build(path, probe, curve, lines, t, p, d):
                                     f"{c.hold_end - c.hold_start + 1} samples; need >= 3 "
                                     "(sample faster)")
     protocol = _protocol(cycles)
-    q = _resolution(d)
+    q = grid_step(d)
     q_sd = q / math.sqrt(12.0) if q else 0.0
     raw_sd = _noise_sd(t, d, cycles)
     noise_sd = max(raw_sd, q_sd)
@@ -665,16 +665,17 @@ def _protocol_note(protocol, cycles, t) -> str:
 
 
 # ------------------------------------------------------------------ resolution, noise
-def _resolution(d) -> float | None:
+def grid_step(d, min_steps: int = 20) -> float | None:
     """The deflection's grid step: the smallest gap between distinct values, if every
-    value is a whole multiple of it (to 2 % of a step) and the range spans at least 20
-    steps (two levels 0.5 mm apart are a square wave, not a resolution); None otherwise
-    or below 1e-6 mm."""
+    value is a whole multiple of it (to 2 % of a step) and the range spans at least
+    ``min_steps`` steps (to read a resolution off a file, 20: two levels 0.5 mm apart
+    are a square wave, not a resolution); None otherwise or below 1e-6 mm."""
+    d = np.asarray(d, dtype=float)
     values = np.unique(d)
     if values.size < 2:
         return None
     q = float(np.diff(values).min())
-    if q < 1e-6 or q > np.ptp(values) / 20:
+    if q < 1e-6 or q > np.ptp(values) / min_steps:
         return None
     r = d / q
     if np.max(np.abs(r - np.round(r))) > 0.02:
