@@ -21,7 +21,7 @@
 #    (NaN at the same places), prints the SLURM job ids of the run and the SLURM
 #    version, and exits non-zero on any failure or mismatch.
 #
-# The subset: config/ci.yaml (--replace-workflow-config) plus an overlay written
+# The subset: config/ci.yaml (a whole config) plus an overlay written
 # below, and these targets:
 #   results/simulated_space/paper.parquet          simulate_point (grouped) + assemble_space
 #                                                  (paper space cut to 3 x 3 x 2 probes = 18 points)
@@ -234,7 +234,7 @@ identification:
 scale_free_space:
   ratio: [0.001, 0.1]                   # the 6 mm ray at 0.001 stops early (NaN tail)
 EOF
-CONFIG_ARGS=(--configfile config/ci.yaml "$OVERLAY" --replace-workflow-config)
+CONFIG_ARGS=(--configfile config/ci.yaml "$OVERLAY")  # ci.yaml: whole_config
 TARGETS=(
     results/simulated_space/paper.parquet
     results/simulated_space/scale_free/neo_hookean.parquet

@@ -211,6 +211,12 @@ def test_check_config_names_the_line_of_a_users_configfile(tmp_path):
     for args in (["config/ci.yaml"], ["config/ci.yaml", "--no-base"], ["config/config.yaml"]):
         code, out = _check_config(ROOT, *args)
         assert code == 0 and "a valid configuration" in out, (args, out)
+        # ci.yaml is a whole configuration: checked alone, as the workflow reads it
+        assert ("merged over" in out) == (args == ["config/config.yaml"]), (args, out)
+
+    bad.write_text("whole_config: true\nmesh:\n  refinement: 1\n")  # whole, but no spaces
+    code, out = _check_config(ROOT, str(bad))
+    assert code == 2 and "required" in out and "over config/config.yaml" not in out, out
 
 
 def _pins(lines):

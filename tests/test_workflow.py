@@ -97,6 +97,30 @@ def test_dry_run_lists_one_fe_job_per_grid_point(workdir, name, n_space):
     assert counts["fig3_boundary_conditions"] == 1
 
 
+def _planned_outputs(out: str) -> list:
+    """The output files of every job of a dry run, sorted."""
+    return sorted(re.findall(r"^\s*output: (.+)$", out, flags=re.M))
+
+
+def test_ci_config_plans_the_same_jobs_merged_or_alone(workdir):
+    # A cluster job re-reads the Snakefile without --replace-workflow-config (Snakemake
+    # does not pass it on): its DAG must equal the main process's, or the job fails
+    # with "KeyError: <bundle>" (rays_per_job came from the default only).
+    alone = snakemake(workdir, "-n", "--configfile", "config/ci.yaml",
+                      "--replace-workflow-config")
+    merged = snakemake(workdir, "-n", "--configfile", "config/ci.yaml")
+    assert _planned_outputs(alone) and _planned_outputs(alone) == _planned_outputs(merged)
+    assert job_counts(alone) == job_counts(merged)
+
+
+def test_a_partial_overlay_still_merges_over_the_default(workdir):
+    # an overlay without whole_config keeps the default's spaces (here: the paper's)
+    out = snakemake(workdir, "-n", *write_config(workdir, "overlay_only",
+                                                 {"pressures_mbar": {"start": 0, "stop": 100,
+                                                                     "step": 2}})[:2])
+    assert job_counts(out)["simulate_point"] == 320
+
+
 def test_default_invocation_runs_the_paper_study(workdir):
     counts = job_counts(snakemake(workdir, "-n"))
     assert counts["simulate_point"] == 320
@@ -337,3 +361,14 @@ def test_end_to_end_with_the_real_model(tmp_path):
     free = t.loc[t["bottom"] == "free", "deflection_mm"].item()
     fixed = t.loc[t["bottom"] == "fixed", "deflection_mm"].item()
     assert free >= fixed * (1 - 1e-6)  # the free interface is the softest (paper, 3.1)
+
+
+def test_a_cluster_run_refuses_replace_workflow_config_without_whole_config(tmp_path):
+    # the option would not reach the cluster jobs: refused before any job is submitted
+    workdir = copy_workflow(tmp_path)
+    full = yaml.safe_load((workdir / "config" / "config.yaml").read_text())
+    args = write_config(workdir, "mine", full)
+    out = snakemake(workdir, "--executor", "slurm", "--jobs", "1", *args, check=False,
+                    timeout=300)
+    assert "add `whole_config: true` to the file" in out, out
+    assert "has been submitted" not in out, out

@@ -562,9 +562,12 @@ def _run_check_config(args: argparse.Namespace) -> int:
                        EXIT_INPUT)
     base = None if args.no_base else (Path(args.base) if args.base else
                                       (DEFAULT_CONFIG if DEFAULT_CONFIG.is_file() else None))
-    config = read_config(base) if base is not None else {}
+    given = {}
     for path in args.configfiles:
-        config = merge(config, read_config(path))
+        given = merge(given, read_config(path))
+    if given.get("whole_config", False):
+        base = None  # as the workflow: such a file is not merged over the default
+    config = merge(read_config(base), given) if base is not None else given
     names = ", ".join(args.configfiles)
     check_config(config, schema, source=names if base is None else f"{names} over {base}")
     print(f"{names}: valid YAML and a valid configuration"

@@ -40,7 +40,27 @@ except InputError as _err:
     raise WorkflowError(str(_err))
 
 
-configfile: "config/config.yaml"
+# A file that says `whole_config: true` is the whole configuration: the default is not
+# read under it. Snakemake does not pass --replace-workflow-config on to cluster jobs, so
+# without this a cluster job would merge the file over the default and build another DAG
+# than the main process (other bundle names: "KeyError: <bundle>" in the job).
+if not config.get("whole_config", False):
+
+    configfile: "config/config.yaml"
+
+
+onstart:
+    # the executor is known only now, before any job is submitted
+    if (
+        workflow.config_settings.replace_workflow_config
+        and not config.get("whole_config", False)
+        and workflow.non_local_exec
+    ):
+        raise WorkflowError(
+            "--replace-workflow-config is not passed on to cluster jobs by Snakemake, which "
+            "would merge your config file over config/config.yaml and plan other jobs: "
+            "add `whole_config: true` to the file instead"
+        )
 
 
 try:
