@@ -622,3 +622,51 @@ def test_confusion_rates_over_distinguishable_draws():
     assert r["distinguishable"] == 4  # of the detectable: rows 0, 1, 2 and 4
     assert r["named_right_distinguishable"] == pytest.approx(3 / 4)
     assert r["right_or_tied"] == pytest.approx(4 / 6)  # row 3 has the truth in the tie
+
+
+# ------------------------------------------- causes' rays on demand in an X1h/X1d window
+class _WindowSolver:
+    """Serves the toy spaces' rays as a solver on demand would, and records the asks."""
+
+    def __init__(self, spaces):
+        self.spaces, self.asked = spaces, []
+
+    def rays(self, probe, t_d, t_h, cause=None, ratio_nodes=None):
+        s = self.spaces[BASELINE if cause is None else cause.name]
+        nodes = s.spec.ratio_nodes if ratio_nodes is None else tuple(ratio_nodes)
+        keep = [s.spec.ratio_nodes.index(r) for r in nodes]
+        self.asked.append((None if cause is None else cause.name, nodes))
+        a = s.rays(probe)[keep]
+        return a, {"rays": a.shape[0] * a.shape[1], "stopped_early": 0, "cache": "-"}
+
+
+@pytest.mark.parametrize("decades", [0.6, 0.15])
+def test_causes_solved_in_a_window_around_the_baseline_fit_as_with_every_node(decades):
+    from skinsuction.space import Geometry
+
+    spaces = toy_spaces(ratio_nodes=np.geomspace(0.001, 1.0, 13))
+    data = _toy_data(0.03, 0.02, 1.1, "pre_tension", 0.5, seed=3)
+    given = Geometry(1.2, 1.0, given=("t_d",))  # layers given: causes solved on demand
+    reports = {}
+    for window in (None, decades):
+        solver = _WindowSolver(spaces)
+        reports[window] = diagnose(data, spaces, Settings(cause_window_decades=window),
+                                   geometry=given, on_demand=solver)
+        asked = [len(n) for c, n in solver.asked if c is not None]
+        if window is None:
+            assert set(asked) == {13}
+        else:
+            assert max(asked) < 13  # never the whole axis here
+            cut = reports[window]
+    full = reports[None]
+    assert cut["cause"] == full["cause"] == "pre_tension"
+    for a, b in zip(full["candidates"], cut["candidates"]):
+        assert a["cause"] == b["cause"]
+        for k in ("X1d", "X1h", a["extra_parameter"]["symbol"]):
+            assert b["parameters"][k] == pytest.approx(a["parameters"][k], rel=2e-3), k
+        # an edge of the cut window is never reported as an edge of the space
+        assert ({k: f["at_bound"] for k, f in b["at_bound"].items()}
+                == {k: f["at_bound"] for k, f in a["at_bound"].items()})
+    # pre-tension's fit lies 1.3 decades above the baseline's X1h/X1d (the lowest node)
+    assert any(n.startswith("pre_tension: its fit reached") and "widened" in n
+               for n in cut["geometry"]["notes"]), cut["geometry"]["notes"]

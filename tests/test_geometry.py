@@ -321,3 +321,27 @@ def test_similar_geometries_share_the_cached_rays(solver):
     b, info = solver.rays(8.0, 3.0, 6.0)  # the same t/a: read from the cache, scaled
     assert solver.solved == solved and Path(info["cache"]).exists()
     assert np.allclose(b, 2 * a, rtol=1e-15)
+
+
+def test_a_window_of_nodes_is_solved_alone_and_the_rest_joins_its_cache_later(tmp_path):
+    import io
+
+    log = io.StringIO()
+    solver = OnDemandRays(SPEC, cache_dir=tmp_path, progress=log)
+    part, info = solver.rays(4.0, 1.3, 2.0, ratio_nodes=(0.2,))
+    assert part.shape == (1, 1, len(SPEC.pressures_mbar)) and info["rays"] == 1
+    whole, info = solver.rays(4.0, 1.3, 2.0)
+    assert info["rays"] == 2 and np.array_equal(whole[1:], part)
+    # the second ask solved the missing node alone, into the same file
+    assert [line.split(":")[1].split("FE")[0].strip() for line in log.getvalue().splitlines()] \
+        == ["1", "1"]
+    assert len(list(Path(info["cache"]).parent.glob("*.parquet"))) == 1
+    p = np.asarray(SPEC.pressures_mbar)
+    c = simulate(0.01, 0.01 * SPEC.ratio_nodes[0], t_d=1.3, t_h=2.0, probe_mm=4.0,
+                 pressures_mbar=p, mesh={"refinement": 0.5})
+    m = np.asarray(c.deflection_mm)
+    assert np.allclose(whole[0, 0, :m.size], m, rtol=1e-9, atol=1e-12)
+    solver.rays(4.0, 1.3, 2.0, ratio_nodes=(0.02,))  # in the cache now: nothing solved
+    assert solver.solved == 2
+    with pytest.raises(ValueError, match="not nodes of the ray specification"):
+        solver.rays(4.0, 1.3, 2.0, ratio_nodes=(0.05,))

@@ -104,6 +104,12 @@ class Settings:
         misfit test, as the identification's intervals do; without it a smooth
         error of the space on soft skin (a few µm at the top of a 6 mm curve) reads
         as a systematic misfit.
+    cause_window_decades : float or None
+        Where the causes' rays are solved on demand (a probe or layers the
+        precomputed space lacks), only the X1h/X1d nodes within this many decades
+        of the neo-Hookean fit are solved (about 7 of 16 at 1.0), and the window
+        widens by as much where a cause's fit reaches its outer cell; None: every
+        node.  The precomputed rays are used whole.
     """
 
     alpha: float = 0.01
@@ -119,6 +125,7 @@ class Settings:
     intervals: str = "chosen"
     window_focusing: dict = field(default_factory=lambda: dict(PAPER_WF))
     space_error: bool = True
+    cause_window_decades: float | None = 1.0
 
     def __post_init__(self):
         if not 0 < self.alpha < 1:
@@ -135,6 +142,9 @@ class Settings:
             raise ValueError(f"intervals must be 'chosen' or 'all', got {self.intervals!r}")
         if not 0.5 <= self.level < 1:
             raise ValueError(f"level must lie in [0.5, 1), got {self.level}")
+        if self.cause_window_decades is not None and not self.cause_window_decades > 0:
+            raise ValueError("cause_window_decades must be positive or None, got "
+                             f"{self.cause_window_decades}")
 
     @classmethod
     def from_config(cls, decision: dict | None = None, fit: dict | None = None, **kw):
@@ -312,10 +322,19 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     geometry_warnings = []
     if geometry is None:
         geometry, geometry_warnings = geometry_of(data)
-    try:
-        spaces, geometry_notes = spaces_at(spaces, data.probes, geometry, on_demand)
-    except GeometryOutsideSpace as err:
-        raise InputError(f"{data.path}: {err}") from None
+    given_spaces = spaces
+    # with rays on demand the causes' X1h/X1d window is centred on the baseline's fit:
+    # the baseline's space first, the causes' after it is fitted
+    windowed = on_demand is not None and settings.cause_window_decades is not None
+
+    def at_layers(names, window=None):
+        try:
+            return spaces_at({n: given_spaces[n] for n in names}, data.probes, geometry,
+                             on_demand, ratio_window=window)
+        except GeometryOutsideSpace as err:
+            raise InputError(f"{data.path}: {err}") from None
+
+    spaces, geometry_notes = at_layers([BASELINE] if windowed else list(given_spaces))
     base_space = spaces[BASELINE]
     probes = [p for p in data.probes if base_space.has_probe(p)]
     skipped = [p for p in data.probes if not base_space.has_probe(p)]
@@ -350,6 +369,15 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
                                    if two_probes else (None, None))
 
     # 2. candidates
+    full_ratio = base_space.spec.ratio_nodes
+    if windowed:
+        half = 10.0 ** settings.cause_window_decades
+        # widen by as many nodes as the half-width spans, at least one
+        per_decade = (len(full_ratio) - 1) / math.log10(full_ratio[-1] / full_ratio[0])
+        step = max(1, round(settings.cause_window_decades * per_decade))
+        r0 = base.parameters["X1h"] / base.parameters["X1d"]
+        spaces, geometry_notes = at_layers(list(given_spaces), (r0 / half, r0 * half))
+        spaces[BASELINE] = base_space
     candidates, fits, tests = [], {}, {}
     for name, space in spaces.items():
         if name == BASELINE:
@@ -360,6 +388,24 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         null_theta = np.array([*base.theta, cause.to_axis(cause.neutral)])
         f = fit_model(space, fd, seed=next(seeds), repeats=settings.repeats,
                       window_focusing_options=settings.window_focusing, starts=[null_theta])
+        while windowed:  # a fit in the outer cell of a cut window: widen it, fit again
+            nodes, r = space.spec.ratio_nodes, 10.0 ** f.theta[1]
+            i0, i1 = full_ratio.index(nodes[0]), full_ratio.index(nodes[-1])
+            if r < nodes[1] and i0 > 0:
+                i0 = max(0, i0 - step)
+            if r > nodes[-2] and i1 < len(full_ratio) - 1:
+                i1 = min(len(full_ratio) - 1, i1 + step)
+            lo, hi = full_ratio[i0], full_ratio[i1]
+            if (lo, hi) == (nodes[0], nodes[-1]):
+                break
+            wider, notes = at_layers([BASELINE, name], (lo, hi))
+            space = spaces[name] = wider[name]
+            geometry_notes += [f"{name}: its fit reached X1h/X1d = {r:.3g}, in the outer cell "
+                               f"of its window: widened to {lo:.3g}-{hi:.3g}"]
+            geometry_notes += [n for n in notes if n.startswith(f"{name}:")]
+            f = fit_model(space, fd, seed=next(seeds), repeats=settings.repeats,
+                          window_focusing_options=settings.window_focusing,
+                          starts=[f.theta, null_theta])
         t = misfit_test(_residual_dict(f, fd), sigma, noise.dof, settings.degree,
                         settings.alpha)
         b = bic(f.chi2, f.n_params, n_points)

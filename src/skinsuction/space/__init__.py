@@ -52,6 +52,7 @@ from ._geometry import (
     default_cache_dir,
     ThicknessNuisance,
     spaces_at,
+    window_nodes,
 )
 from ._grid import (
     SimulatedSpace,

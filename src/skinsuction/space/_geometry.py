@@ -16,11 +16,12 @@ round-off in tests/test_model.py), makes a cached set of rays serve every
 geometrically similar measurement: the cache key is the dimensionless geometry
 (t_d/a, t_h/a), the rays are scaled by the aperture.
 
-The causes keep their precomputed rays: :func:`spaces_at` adds a cause's effect
-on log M (its rays over the neutral ones, interpolated across the probes in log
-of the aperture) to the measurement's neo-Hookean rays.  At the probes and
-layers the cause was simulated for, that is its own rays; elsewhere it is an
-approximation, and the notes say so.
+The causes get their own rays at that geometry too, solved on demand
+(:func:`spaces_at`); a diagnosis asks only for the X1h/X1d nodes in a window
+around its neo-Hookean fit and widens it where a cause's fit reaches its edge
+(``ratio_window``).  Without a solver a cause's effect on log M is carried over
+from the probes and layers it was simulated for, an approximation the notes
+name.
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ from ._causes import BASELINE
 log = logging.getLogger(__name__)
 
 __all__ = ["Geometry", "GeometryOutsideSpace", "OnDemandRays", "spaces_at", "ThicknessNuisance",
-           "DEFAULT_LAYERS_MM", "default_cache_dir"]
+           "DEFAULT_LAYERS_MM", "default_cache_dir", "window_nodes"]
 
 #: Thicknesses are rounded to this (mm) before rays are solved for them: a
 #: measured thickness is not known better, and rounded geometries share a cache.
@@ -106,13 +107,13 @@ class OnDemandRays:
         self.dir = Path(cache_dir or default_cache_dir()) / "rays" / key
         self.solved = 0  # geometries solved by this object (not read from the cache)
 
-    def _ray_ids(self, probe_mm, t_d, t_h, cause=None, coordinate=None):
+    def _ray_ids(self, probe_mm, t_d, t_h, cause=None, coordinate=None, ratio_nodes=None):
         from ._rays import ray_id
         from ._storage import round_sig
 
         x1d = self.spec.x1d_ref
         out = []
-        for r in self.spec.ratio_nodes:
+        for r in self.spec.ratio_nodes if ratio_nodes is None else ratio_nodes:
             params = {"probe_mm": probe_mm, "bottom": self.spec.bottom,
                       "x1d": round_sig(x1d), "x1h": round_sig(r * x1d),
                       "t_d": t_d, "t_h": t_h}
@@ -122,7 +123,7 @@ class OnDemandRays:
             out.append(ray_id(params))
         return out
 
-    def rays(self, probe_mm: float, t_d: float, t_h: float, cause=None):
+    def rays(self, probe_mm: float, t_d: float, t_h: float, cause=None, ratio_nodes=None):
         """``(rays (n_r, n_c, n_p) in mm, info)`` of one probe at one geometry.
 
         ``cause=None``: the neo-Hookean rays (``n_c = 1``); a :class:`Cause`: its
@@ -130,27 +131,33 @@ class OnDemandRays:
         A thickness cause (``t_d``, ``t_h``) replaces that layer's thickness.
         The rays are solved for the reference aperture of the dimensionless
         geometry (2 mm, thicknesses ``t/a``) and scaled by ``a`` (geometric
-        similarity), so similar measurements share them.
+        similarity), so similar measurements share them.  ``ratio_nodes``: only
+        these X1h/X1d nodes of the specification (``n_r`` of them; default all);
+        the rays of other nodes solved later join the same cache file.
         """
         from ._storage import round_sig
 
+        nodes = self.spec.ratio_nodes if ratio_nodes is None else tuple(ratio_nodes)
+        if not set(nodes) <= set(self.spec.ratio_nodes):
+            raise ValueError(f"ratio nodes {nodes} are not nodes of the ray specification "
+                             f"{self.spec.ratio_nodes}")
         a = probe_mm / 2
         ref_td, ref_th = round_sig(t_d / a, 6), round_sig(t_h / a, 6)
         if cause is None:
-            return self._read(ref_td, ref_th, a, None, None)
+            return self._read(ref_td, ref_th, a, None, None, nodes)
         columns, infos = [], []
         for c in cause.nodes:
             if c == cause.neutral:
-                m, info = self._read(ref_td, ref_th, a, None, None)
+                m, info = self._read(ref_td, ref_th, a, None, None, nodes)
             else:
-                m, info = self._read(ref_td, ref_th, a, cause, c)
+                m, info = self._read(ref_td, ref_th, a, cause, c, nodes)
             columns.append(m[:, 0])
             infos.append(info)
         info = {"cache": str(self.dir), "rays": sum(i["rays"] for i in infos),
                 "stopped_early": sum(i["stopped_early"] for i in infos)}
         return np.stack(columns, axis=1), info
 
-    def _read(self, ref_td, ref_th, a, cause, c):
+    def _read(self, ref_td, ref_th, a, cause, c, nodes):
         from ._storage import _read_parquet, round_sig
 
         if cause is None:
@@ -160,19 +167,26 @@ class OnDemandRays:
             # a thickness node is a length: it scales with the aperture like the layers
             coord = round_sig(c / a, 6) if cause.geometric else c
             path = self.dir / f"td{ref_td:g}_th{ref_th:g}__{cause.keyword}{coord:g}.parquet"
-        ids = self._ray_ids(2.0, ref_td, ref_th, cause, coord)
+        ids = self._ray_ids(2.0, ref_td, ref_th, cause, coord, nodes)
         if not path.exists():
             self._solve(path, ids, ref_td, ref_th)
         frame, meta = _read_parquet(path)
+        missing = [rid for rid in ids if rid not in set(frame["ray_id"])]
+        if missing:  # other X1h/X1d nodes than those solved before: add them to the file
+            extra = path.with_name(f"{path.stem}.extra.parquet")
+            self._solve(extra, missing, ref_td, ref_th)
+            _merge_bundles([path, extra], path)
+            frame, meta = _read_parquet(path)
         p = np.asarray(self.spec.pressures_mbar)
-        out = np.full((len(self.spec.ratio_nodes), 1, p.size), np.nan)
+        out = np.full((len(ids), 1, p.size), np.nan)
         for i, rid in enumerate(ids):
             g = frame[frame["ray_id"] == rid]
             if len(g) != p.size:
                 raise RuntimeError(f"{path}: ray {rid} is missing or incomplete; delete the "
                                    "file to solve it again")
             out[i, 0] = g["deflection_mm"].to_numpy(float) * a
-        stopped = sum(1 for r in (meta.get("rays") or {}).values() if not r.get("converged"))
+        infos = meta.get("rays") or {}
+        stopped = sum(1 for rid in ids if not infos.get(rid, {}).get("converged", True))
         return out, {"cache": str(path), "rays": len(ids), "stopped_early": stopped}
 
     def _solve(self, path: Path, ids, td: float, th: float):
@@ -257,7 +271,8 @@ def _merge_bundles(parts, path):
         meta = {**m, "rays": rays}
     _write_parquet(pd.concat(frames, ignore_index=True), path, meta)
     for p in parts:
-        Path(p).unlink(missing_ok=True)
+        if Path(p) != Path(path):
+            Path(p).unlink(missing_ok=True)
 
 
 def _cause_effect(space, probe_mm: float):
@@ -291,8 +306,31 @@ def _cause_effect(space, probe_mm: float):
     return np.tensordot(w[0], block, axes=(0, 0))
 
 
+def window_nodes(nodes, window=None) -> tuple:
+    """The X1h/X1d nodes within ``window = (lo, hi)``, at least 4 (a cubic stencil).
+
+    >>> window_nodes([1e-4, 1e-3, 1e-2, 0.1, 1.0, 2.0], (0.005, 0.5))
+    (0.001, 0.01, 0.1, 1.0)
+    >>> window_nodes([1e-4, 1e-3, 1e-2, 0.1, 1.0], None)
+    (0.0001, 0.001, 0.01, 0.1, 1.0)
+    """
+    nodes = tuple(float(r) for r in nodes)
+    if window is None:
+        return nodes
+    lo, hi = sorted(float(w) for w in window)
+    inside = [i for i, r in enumerate(nodes) if lo * (1 - 1e-9) <= r <= hi * (1 + 1e-9)]
+    i0 = inside[0] if inside else int(np.searchsorted(nodes, lo))
+    i1 = inside[-1] + 1 if inside else i0
+    while i1 - i0 < min(4, len(nodes)):  # widen, alternately up and down
+        if i1 < len(nodes) and (i1 - i0) % 2 == 0 or i0 == 0:
+            i1 += 1
+        else:
+            i0 -= 1
+    return nodes[i0:i1]
+
+
 def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays | None = None,
-              solve_causes: bool = True):
+              solve_causes: bool = True, ratio_window=None):
     """The ray spaces of one measurement: every model at its probes and layers.
 
     Parameters
@@ -311,6 +349,11 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
         log M is carried over from the layers and probes it was simulated for, an
         approximation measured to fail at other dermis thicknesses
         (docs/geometry.md), and the notes say so.
+    ratio_window : (lo, hi), optional
+        X1h/X1d range of the causes' rays solved on demand: only the nodes within
+        it (:func:`window_nodes`), each cause's space is cut to them.  A
+        diagnosis centres it on the neo-Hookean fit and widens it where a cause's
+        fit reaches its edge; a fraction of the FE rays.  Default: every node.
 
     Returns
     -------
@@ -382,17 +425,23 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
                                  {p: space.rays(p) for p in probes}, space.metadata)
             continue
         if on_demand is not None and solve_causes:
+            nodes = window_nodes(base.spec.ratio_nodes, ratio_window)
+            keep = [base.spec.ratio_nodes.index(r) for r in nodes]
             arrays, n_rays, n_stopped = {}, 0, 0
             for p in probes:
                 if default and space.has_probe(p):
-                    arrays[p] = space.rays(p)
+                    arrays[p] = space.rays(p)[keep]
                     continue
-                arrays[p], info = on_demand.rays(p, t_d, t_h, cause)
+                arrays[p], info = on_demand.rays(p, t_d, t_h, cause, **_subset(nodes, base.spec.ratio_nodes))
                 n_rays += info["rays"]
                 n_stopped += info["stopped_early"]
+            window = ("" if len(nodes) == len(base.spec.ratio_nodes) else
+                      f", X1h/X1d {nodes[0]:g}-{nodes[-1]:g} only ({len(nodes)} of "
+                      f"{len(base.spec.ratio_nodes)} nodes)")
             notes.append(f"{name}: its rays at this geometry solved on demand ({n_rays} FE "
-                         f"rays, {n_stopped} stopped early)")
-            out[name] = RaySpace(cause, spec, np.asarray(cause.nodes, dtype=float), arrays,
+                         f"rays, {n_stopped} stopped early{window})")
+            out[name] = RaySpace(cause, replace(spec, ratio_nodes=nodes),
+                                 np.asarray(cause.nodes, dtype=float), arrays,
                                  {**space.metadata, "geometry": geometry.to_dict()})
             own_brackets.add(name)
             continue
@@ -424,14 +473,21 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
     for name, space in out.items():
         space.nuisance = nuisance
         if nuisance and name in own_brackets:
-            space.nuisance = _nuisances(space, probes, geometry, (t_d, t_h), on_demand, [])
+            space.nuisance = _nuisances(space, probes, geometry, (t_d, t_h), on_demand, [],
+                                        base.spec.ratio_nodes)
     if nuisance and own_brackets:
         notes.append(f"{', '.join(sorted(own_brackets))}: the thickness nuisance moves each "
                      "cause's curve by its own rays at ±1 sd (solved on demand)")
     return out, notes
 
 
-def _nuisances(center, probes, geometry, layers, on_demand, notes) -> tuple:
+def _subset(nodes, full) -> dict:
+    """``{"ratio_nodes": nodes}`` if they are fewer than the ``full`` nodes, else
+    nothing: a solver is asked for a cut window only."""
+    return {"ratio_nodes": tuple(nodes)} if len(nodes) < len(full) else {}
+
+
+def _nuisances(center, probes, geometry, layers, on_demand, notes, full_nodes=()) -> tuple:
     """A :class:`ThicknessNuisance` per given thickness with an sd (rays on demand):
     brackets of ``center``'s own model (neo-Hookean, or a cause at every node)."""
     from ._rays import RaySpace
@@ -453,7 +509,9 @@ def _nuisances(center, probes, geometry, layers, on_demand, notes) -> tuple:
             t = max(_round_mm(t), THICKNESS_RESOLUTION_MM)
             other = list(layers)
             other[i] = t
-            rays = {p: on_demand.rays(p, *other, cause)[0] for p in probes}
+            rays = {p: on_demand.rays(p, *other, cause, **_subset(center.spec.ratio_nodes,
+                                                                   full_nodes))[0]
+                    for p in probes}
             brackets.append(RaySpace(cause, center.spec, coordinates, rays,
                                      {**center.metadata, key: t}))
         out.append(ThicknessNuisance(key, value, float(sd), center, *brackets))
