@@ -345,3 +345,40 @@ def test_a_window_of_nodes_is_solved_alone_and_the_rest_joins_its_cache_later(tm
     assert solver.solved == 2
     with pytest.raises(ValueError, match="not nodes of the ray specification"):
         solver.rays(4.0, 1.3, 2.0, ratio_nodes=(0.05,))
+
+
+def test_a_causes_fit_starts_from_the_neo_hookean_one_with_the_thickness_in_its_place():
+    # the nested start: the cause at its neutral value, the thickness offset where the
+    # cause's model reads it (after the cause's coordinate), so it equals the baseline
+    from skinsuction.diagnose import FitData, fit_model
+    from skinsuction.diagnose._fit import ModelCurves, nested_start
+
+    spec = RaySpec([6], [0.01, 0.1], load_max=100.0, load_steps=8)
+    q = np.linspace(0.0, 1.0, 9)
+    base = np.stack([q, q ** 1.6])[:, None, :]
+    pre = default_registry()["pre_tension"]
+    nodes = np.asarray(pre.nodes)
+
+    def layered(t_d, c):
+        c = np.asarray(c, dtype=float)[None, :, None]
+        return base * (1 - 1.5 * (c - 1) * q) * (1 + 0.8 * (t_d - 1.3) * np.sin(np.pi * q))
+
+    class Solver:
+        def rays(self, p, t_d, t_h, cause=None):
+            c = [1.0] if cause is None else nodes
+            return layered(t_d, c), {"rays": 2 * len(c), "stopped_early": 0, "cache": "-"}
+
+    spaces = {BASELINE: RaySpace(None, spec, np.array([np.nan]), {6.0: base}),
+              "pre_tension": RaySpace(pre, spec, nodes, {6.0: layered(1.0, nodes)})}
+    out, _ = spaces_at(spaces, [6.0], Geometry(1.3, 1.0, given=("t_d",), sd={"t_d": 0.1}),
+                       Solver())
+    p = np.linspace(2.0, 40.0, 12)
+    m = 0.02 * p ** 0.8
+    data = {6.0: FitData(6.0, p, m, 1e-3)}
+    fit = fit_model(out[BASELINE], data, seed=1)
+    assert fit.theta.size == 3 and abs(fit.theta[2]) > 0.05  # the thickness moved
+    start = nested_start(fit.theta, pre)
+    a = ModelCurves(out[BASELINE], data)(fit.theta[None])[6.0]
+    b = ModelCurves(out["pre_tension"], data)(start[None])[6.0]
+    np.testing.assert_allclose(b, a, rtol=1e-12)
+    assert fit_model(out["pre_tension"], data, seed=1, starts=[start]).chi2 <= fit.chi2 * (1 + 1e-9)

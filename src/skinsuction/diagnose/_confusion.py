@@ -99,19 +99,32 @@ def draw_wide(seed: int, cause, domain=None, load_max=None) -> dict:
 
 
 def _spaces_of_draw(spaces, d, on_demand):
-    """The spaces the diagnosis reads for a draw: at its probes and given layers."""
+    """``spaces_for(names=None, window=None)``: the spaces the diagnosis reads for a draw,
+    at its probes and given layers (the causes' rays on demand cut to an X1h/X1d
+    window, as the diagnosis cuts them)."""
     from skinsuction.space import Geometry, spaces_at
 
     g = (Geometry(d["t_d_given"], 1.0, given=("t_d",), sd={"t_d": d["t_d_sd"]})
          if d.get("t_d_given") is not None else Geometry())
-    return spaces_at(spaces, d["probes"], g, on_demand)[0]
+
+    def spaces_for(names=None, window=None):
+        chosen = spaces if names is None else {n: spaces[n] for n in names}
+        return spaces_at(chosen, d["probes"], g, on_demand,
+                         ratio_window=window if on_demand is not None else None)[0]
+
+    return spaces_for
 
 
-def _detectability(ve, spaces, settings, n_points, truth=None):
+def _detectability(ve, spaces_for, settings, n_points, truth=None):
     """Best neo-Hookean fit to the noise-free true curves: chi^2, E, pattern test;
-    for a cause, also how well each other cause mimics it (:func:`_rivals`)."""
+    for a cause, also how well each other cause mimics it (:func:`_rivals`).
+    ``spaces_for``: see :func:`_spaces_of_draw` (or a dict of spaces, used whole)."""
     from ._fit import FitData, fit_model
     from ._stats import misfit_test
+
+    if isinstance(spaces_for, dict):
+        spaces_for = (lambda whole: lambda names=None, window=None: {
+            n: whole[n] for n in (whole if names is None else names)})(spaces_for)
 
     fd = {}
     for probe, m in ve.clean.items():
@@ -120,7 +133,7 @@ def _detectability(ve, spaces, settings, n_points, truth=None):
         fd[probe] = FitData(probe, p[keep], np.asarray(m)[keep],
                             math.hypot(ve.noise_um, settings.model_error_um))
     try:
-        f = fit_model(spaces[BASELINE], fd, seed=0, repeats=1,
+        f = fit_model(spaces_for([BASELINE])[BASELINE], fd, seed=0, repeats=1,
                       window_focusing_options=settings.window_focusing)
     except Exception:  # no neo-Hookean candidate covers the curve: beyond the space
         return {"clean_chi2": math.inf, "clean_E_um": math.nan, "clean_pattern_p": 0.0,
@@ -132,11 +145,11 @@ def _detectability(ve, spaces, settings, n_points, truth=None):
     out = {"clean_chi2": f.chi2, "clean_E_um": f.E_um, "clean_pattern_p": t.p_value,
            "detectable": bool(f.chi2 >= threshold and t.significant)}
     if truth is not None and truth != NONE:
-        out.update(_rivals(fd, spaces, settings, truth, f.theta))
+        out.update(_rivals(fd, spaces_for, settings, truth, f.theta))
     return out
 
 
-def _rivals(fd, spaces, settings, truth, base_theta):
+def _rivals(fd, spaces_for, settings, truth, base_theta):
     """Whether the other causes can tell this one apart, on its noise-free curves.
 
     Every cause's model (the true one included) is fitted to the noise-free
@@ -150,18 +163,33 @@ def _rivals(fd, spaces, settings, truth, base_theta):
     """
     from skinsuction.identify import IdentificationError
 
-    from ._fit import fit_model
+    from ._diagnose import fit_in_window, ratio_window
+    from ._fit import fit_model, nested_start
 
+    decades = settings.cause_window_decades
+    window = None if decades is None else ratio_window(base_theta, decades)
+    spaces = spaces_for(None, window)
+    full = spaces[BASELINE].spec.ratio_nodes
     chi2 = {}
     for name, space in spaces.items():
         # the causes the diagnosis would fit: those whose space has every probe
         if name == BASELINE or not all(space.has_probe(p) for p in fd):
             continue
         cause = space.cause
+        start = nested_start(base_theta, cause)
+
+        def refit(space, previous=None, start=start):
+            return fit_model(space, fd, seed=0, repeats=1,
+                             window_focusing_options=settings.window_focusing,
+                             starts=[start] if previous is None else [previous.theta, start])
+
         try:
-            chi2[name] = fit_model(space, fd, seed=0, repeats=1,
-                                   window_focusing_options=settings.window_focusing,
-                                   starts=[[*base_theta, cause.to_axis(cause.neutral)]]).chi2
+            f = refit(space)
+            if window is not None:
+                f = fit_in_window(space, f, full, decades,
+                                  lambda w, name=name: (spaces_for([BASELINE, name], w)[name],
+                                                        []), refit)[1]
+            chi2[name] = f.chi2
         except IdentificationError:  # the cause's space does not cover the curves
             chi2[name] = math.inf
     others = {k: v for k, v in chi2.items() if k != truth}

@@ -45,7 +45,8 @@ from skinsuction.identify import IdentificationError
 from skinsuction.errors import InputError
 
 from skinsuction.space import BASELINE, NONE
-from ._fit import PAPER_WF, FitData, fit_bounds, fit_intervals, fit_model, with_space_error
+from ._fit import (PAPER_WF, FitData, fit_bounds, fit_intervals, fit_model, nested_start,
+                   with_space_error)
 from ._stats import (
     NoiseEstimate,
     bic,
@@ -289,6 +290,59 @@ def _holdout(space, data, settings, seed):
     return main, detail
 
 
+def ratio_window(theta, decades: float) -> tuple:
+    """X1h/X1d within ``decades`` of a fit's ``theta = (log10 X1d, log10 X1h/X1d, ...)``."""
+    r, half = 10.0 ** float(theta[1]), 10.0 ** float(decades)
+    return (r / half, r * half)
+
+
+def widened_window(nodes, ratio: float, full, decades: float):
+    """The wider window when ``ratio`` lies in an outer cell of the cut ``nodes``.
+
+    Widened by as many of the ``full`` nodes as ``decades`` spans (at least one) on
+    that side; None when ``ratio`` is inside, or the cut already reaches that end.
+
+    >>> full = (1e-4, 1e-3, 1e-2, 0.1, 1.0)
+    >>> widened_window((1e-3, 1e-2, 0.1), 2e-3, full, 1.0)
+    (0.0001, 0.1)
+    >>> widened_window((1e-3, 1e-2, 0.1), 5e-2, full, 1.0)
+    (0.001, 1.0)
+    >>> widened_window((1e-4, 1e-3, 1e-2), 5e-4, full, 1.0) is None
+    True
+    """
+    full = tuple(full)
+    per_decade = (len(full) - 1) / math.log10(full[-1] / full[0])
+    step = max(1, round(decades * per_decade))
+    i0, i1 = full.index(nodes[0]), full.index(nodes[-1])
+    if ratio < nodes[1] and i0 > 0:
+        i0 = max(0, i0 - step)
+    if ratio > nodes[-2] and i1 < len(full) - 1:
+        i1 = min(len(full) - 1, i1 + step)
+    return None if (i0, i1) == (full.index(nodes[0]), full.index(nodes[-1])) else (full[i0],
+                                                                                   full[i1])
+
+
+def fit_in_window(space, fit, full, decades: float, rebuild, refit):
+    """A cause's fit on a cut X1h/X1d window, widened and refitted until it lies inside.
+
+    ``rebuild(window) -> (space, notes)`` gives the cause's space over a wider
+    window, ``refit(space, previous_fit) -> fit`` fits it again; a space with
+    every node is returned as it is.  Returns ``(space, fit, notes)``: the notes
+    say each widening.
+    """
+    notes = []
+    while True:
+        r = 10.0 ** float(fit.theta[1])
+        window = widened_window(space.spec.ratio_nodes, r, full, decades)
+        if window is None:
+            return space, fit, notes
+        name = space.cause.name if space.cause is not None else BASELINE
+        space, more = rebuild(window)
+        notes += [f"{name}: its fit reached X1h/X1d = {r:.3g}, in the outer cell of its "
+                  f"window: widened to {window[0]:.3g}-{window[1]:.3g}", *more]
+        fit = refit(space, fit)
+
+
 def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=None,
              geometry=None, on_demand=None) -> dict:
     """Diagnose loaded measured data (:class:`skinsuction.measured.MeasuredData`).
@@ -371,12 +425,8 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     # 2. candidates
     full_ratio = base_space.spec.ratio_nodes
     if windowed:
-        half = 10.0 ** settings.cause_window_decades
-        # widen by as many nodes as the half-width spans, at least one
-        per_decade = (len(full_ratio) - 1) / math.log10(full_ratio[-1] / full_ratio[0])
-        step = max(1, round(settings.cause_window_decades * per_decade))
-        r0 = base.parameters["X1h"] / base.parameters["X1d"]
-        spaces, geometry_notes = at_layers(list(given_spaces), (r0 / half, r0 * half))
+        spaces, geometry_notes = at_layers(
+            list(given_spaces), ratio_window(base.theta, settings.cause_window_decades))
         spaces[BASELINE] = base_space
     candidates, fits, tests = [], {}, {}
     for name, space in spaces.items():
@@ -385,27 +435,23 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         if not all(space.has_probe(p) for p in probes):
             continue
         cause = space.cause
-        null_theta = np.array([*base.theta, cause.to_axis(cause.neutral)])
+        null_theta = nested_start(base.theta, cause)
         f = fit_model(space, fd, seed=next(seeds), repeats=settings.repeats,
                       window_focusing_options=settings.window_focusing, starts=[null_theta])
-        while windowed:  # a fit in the outer cell of a cut window: widen it, fit again
-            nodes, r = space.spec.ratio_nodes, 10.0 ** f.theta[1]
-            i0, i1 = full_ratio.index(nodes[0]), full_ratio.index(nodes[-1])
-            if r < nodes[1] and i0 > 0:
-                i0 = max(0, i0 - step)
-            if r > nodes[-2] and i1 < len(full_ratio) - 1:
-                i1 = min(len(full_ratio) - 1, i1 + step)
-            lo, hi = full_ratio[i0], full_ratio[i1]
-            if (lo, hi) == (nodes[0], nodes[-1]):
-                break
-            wider, notes = at_layers([BASELINE, name], (lo, hi))
-            space = spaces[name] = wider[name]
-            geometry_notes += [f"{name}: its fit reached X1h/X1d = {r:.3g}, in the outer cell "
-                               f"of its window: widened to {lo:.3g}-{hi:.3g}"]
-            geometry_notes += [n for n in notes if n.startswith(f"{name}:")]
-            f = fit_model(space, fd, seed=next(seeds), repeats=settings.repeats,
-                          window_focusing_options=settings.window_focusing,
-                          starts=[f.theta, null_theta])
+        if windowed:
+            def rebuild(window, name=name):
+                wider, notes = at_layers([BASELINE, name], window)
+                return wider[name], [n for n in notes if n.startswith(f"{name}:")]
+
+            def refit(space, previous, null_theta=null_theta):
+                return fit_model(space, fd, seed=next(seeds), repeats=settings.repeats,
+                                 window_focusing_options=settings.window_focusing,
+                                 starts=[previous.theta, null_theta])
+
+            space, f, notes = fit_in_window(space, f, full_ratio,
+                                            settings.cause_window_decades, rebuild, refit)
+            spaces[name] = space
+            geometry_notes += notes
         t = misfit_test(_residual_dict(f, fd), sigma, noise.dof, settings.degree,
                         settings.alpha)
         b = bic(f.chi2, f.n_params, n_points)

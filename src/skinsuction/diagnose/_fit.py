@@ -141,6 +141,21 @@ class ModelCurves:
         return out
 
 
+def nested_start(base_theta, cause) -> np.ndarray:
+    """A cause's theta at its neutral value from the neo-Hookean fit's theta.
+
+    The cause's coordinate goes after (X1d, X1h/X1d) and before any thickness
+    nuisance, as :class:`ModelCurves` orders them; the cause's model then fits
+    at least as well as the neo-Hookean one.
+
+    >>> from skinsuction.space import default_registry
+    >>> nested_start([-1.4, -2.0, 0.3], default_registry()["pre_tension"])
+    array([-1.4, -2. ,  1. ,  0.3])
+    """
+    t = np.asarray(base_theta, dtype=float)
+    return np.concatenate([t[:2], [cause.to_axis(cause.neutral)], t[2:]])
+
+
 #: Search range of a thickness nuisance, in sd units either side of the given value.
 NUISANCE_RANGE = 3.0
 
