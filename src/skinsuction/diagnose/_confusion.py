@@ -118,13 +118,10 @@ def _spaces_of_draw(spaces, d, on_demand):
 def _detectability(ve, spaces_for, settings, n_points, truth=None):
     """Best neo-Hookean fit to the noise-free true curves: chi^2, E, pattern test;
     for a cause, also how well each other cause mimics it (:func:`_rivals`).
-    ``spaces_for``: see :func:`_spaces_of_draw` (or a dict of spaces, used whole)."""
+    ``spaces_for``: see :func:`_spaces_of_draw`."""
     from ._fit import FitData, fit_model
     from ._stats import misfit_test
 
-    if isinstance(spaces_for, dict):
-        spaces_for = (lambda whole: lambda names=None, window=None: {
-            n: whole[n] for n in (whole if names is None else names)})(spaces_for)
 
     fd = {}
     for probe, m in ve.clean.items():
