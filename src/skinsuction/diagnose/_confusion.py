@@ -122,7 +122,6 @@ def _detectability(ve, spaces_for, settings, n_points, truth=None):
     from ._fit import FitData, fit_model
     from ._stats import misfit_test
 
-
     fd = {}
     for probe, m in ve.clean.items():
         p = ve.pressures_mbar
