@@ -121,6 +121,18 @@ def test_a_partial_overlay_still_merges_over_the_default(workdir):
     assert job_counts(out)["simulate_point"] == 320
 
 
+def test_the_confusion_with_the_dermis_given_is_one_job_a_draw(workdir):
+    # a cluster runs the draws side by side; a stopped run keeps the draws it finished
+    config = yaml.safe_load((workdir / "config" / "config.yaml").read_text())
+    per = config["diagnosis"]["confusion_given_layers"]["per_cause"]
+    truths = 1 + sum(c["keyword"] != "t_d" for c in config["scale_free_space"]["causes"].values())
+    out = snakemake(workdir, "-n", "confusion_given_layers")
+    counts = job_counts(out)
+    assert counts["confusion_given_layers_draw"] == truths * per == 4 * per
+    assert counts["confusion_given_layers"] == 1
+    assert "results/diagnosis/confusion_given_layers/pre_tension_3" in out  # seed 1000 + 300000
+
+
 def test_default_invocation_runs_the_paper_study(workdir):
     counts = job_counts(snakemake(workdir, "-n"))
     assert counts["simulate_point"] == 320

@@ -354,12 +354,53 @@ if "diagnosis" in config:
 
     if "confusion_given_layers" in DG:
         # Opt-in (not in the default target): every draw has its own dermis, and every
-        # candidate cause's rays are solved on demand at it and at +-1 sd of it, about
-        # 45 CPU-min a draw.
+        # candidate cause's rays are solved on demand at it and at +-1 sd of it (cut to
+        # an X1h/X1d window around the neo-Hookean fit), some 15 CPU-min a draw: one job
+        # a draw, so a cluster runs them side by side and a stopped run keeps its draws.
+        CGL = DG["confusion_given_layers"]
+        CGL_TRUTHS = ["none"] + [n for n, c in SF_CAUSES.items() if c.keyword != "t_d"]
+        CGL_DRAWS = [f"{truth}_{int(CGL.get('seed', 1000)) + 100000 * k + i}"
+                     for k, truth in enumerate(CGL_TRUTHS) for i in range(CGL["per_cause"])]
+        CGL_DIR = "results/diagnosis/confusion_given_layers"
+
+        rule confusion_given_layers_draw:
+            """One virtual experiment with its dermis given: FE curves, diagnosis, verdict."""
+            input:
+                spaces=SF_SPACES,
+            output:
+                row=f"{CGL_DIR}/{{draw}}.csv",
+            wildcard_constraints:
+                draw="[a-z_]+_[0-9]+",
+            log:
+                "logs/diagnosis/confusion_given_layers/{draw}.log",
+            benchmark:
+                "results/benchmarks/diagnosis/confusion_given_layers/{draw}.tsv"
+            params:
+                domain={
+                    "given_dermis_thickness": {
+                        "range": CGL.get("dermis_range_mm", [0.5, 2.5]),
+                        "sd": CGL.get("dermis_sd_mm", 0.1),
+                    },
+                    "probe_pairs": CGL.get("probe_pairs", [[2, 6], [4, 8]]),
+                },
+                on_demand_dir="results/simulated_space/on_demand",
+                decision=DG.get("decision", {}),
+                fit=DG.get("fit", {}),
+                code=code_hash("diagnose", "identify", "model", *SPACE_CODE),
+            threads: 1
+            resources:
+                mem_mb=2000,
+                runtime=120,
+            conda:
+                "../envs/skinsuction.yaml"
+            script:
+                "../scripts/confusion_draw.py"
+
         rule confusion_given_layers:
             """The diagnosis with the dermis thickness given: confusion over the draws."""
             input:
                 spaces=SF_SPACES,
+                rows=expand(f"{CGL_DIR}/{{draw}}.csv", draw=CGL_DRAWS),
             output:
                 draws="results/diagnosis/confusion_given_layers_draws.csv",
                 matrix=report(
@@ -373,28 +414,14 @@ if "diagnosis" in config:
                 pdf="results/figures/detectability_given_layers.pdf",
             log:
                 "logs/diagnosis/confusion_given_layers.log",
-            benchmark:
-                "results/benchmarks/diagnosis/confusion_given_layers.tsv"
             params:
-                per_cause=DG["confusion_given_layers"]["per_cause"],
-                seed=DG["confusion_given_layers"].get("seed", 1000),
-                domain={
-                    "given_dermis_thickness": {
-                        "range": DG["confusion_given_layers"].get("dermis_range_mm", [0.5, 2.5]),
-                        "sd": DG["confusion_given_layers"].get("dermis_sd_mm", 0.1),
-                    },
-                    "probe_pairs": DG["confusion_given_layers"].get(
-                        "probe_pairs", [[2, 6], [4, 8]]),
-                },
-                on_demand_dir="results/simulated_space/on_demand",
-                decision=DG.get("decision", {}),
-                fit=DG.get("fit", {}),
-                code=code_hash("diagnose", "identify", "model", "figures", *SPACE_CODE),
-            threads: 2
+                causes=CGL_TRUTHS[1:],
+                code=code_hash("diagnose", "figures"),
+            threads: 1
             resources:
-                mem_mb=3000,
-                runtime=2880,
+                mem_mb=2000,
+                runtime=10,
             conda:
                 "../envs/skinsuction.yaml"
             script:
-                "../scripts/detectability_map.py"
+                "../scripts/confusion_summary.py"
