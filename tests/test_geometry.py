@@ -213,20 +213,17 @@ def test_a_given_thickness_sd_is_a_nuisance_the_fit_recovers():
     assert fit.chi2 == pytest.approx(((1.42 - 1.3) / 0.1) ** 2, rel=0.05)
 
 
-def test_a_cause_solved_at_the_given_layers_moves_with_the_thickness_by_its_own_rays():
-    """Under pre-tension the dermis changes the deflection otherwise than without it:
-    the cause's thickness brackets are its own rays at +-1 sd, and the fit recovers
-    both the cause and the thickness, where the neo-Hookean brackets cannot."""
-    from skinsuction.diagnose import FitData, fit_model
-    from skinsuction.space import RayInterpolant
-
+def _pre_tension_at_given_dermis():
+    """Toy pre-tension rays whose thickness effect shrinks and turns with the
+    pre-stretch, solved at a dermis of 1.3 +- 0.1 mm: (cause, nodes, layered(t_d, c),
+    the spaces at 1 mm, the spaces at the given dermis, notes)."""
     spec = RaySpec([6], [0.01, 0.1], load_max=100.0, load_steps=8)
     q = np.linspace(0.0, 1.0, 9)
     base = np.stack([q, q ** 1.6])[:, None, :]
     pre = default_registry()["pre_tension"]
     nodes = np.asarray(pre.nodes)
 
-    def layered(t_d, c):  # the thickness's effect shrinks and turns with the pre-stretch
+    def layered(t_d, c):
         c = np.asarray(c, dtype=float)[None, :, None]
         return (base * (1 - 1.5 * (c - 1) * q) * (1 + 0.8 * (t_d - 1.3) * np.sin(np.pi * q)
                                                   * (1 - 8 * (c - 1))))
@@ -240,6 +237,18 @@ def test_a_cause_solved_at_the_given_layers_moves_with_the_thickness_by_its_own_
               "pre_tension": RaySpace(pre, spec, nodes, {6.0: layered(1.0, nodes)})}
     g = Geometry(1.3, 1.0, given=("t_d",), sd={"t_d": 0.1})
     out, notes = spaces_at(spaces, [6.0], g, Solver())
+    return pre, nodes, layered, spaces, out, notes
+
+
+def test_a_cause_solved_at_the_given_layers_moves_with_the_thickness_by_its_own_rays():
+    """Under pre-tension the dermis changes the deflection otherwise than without it:
+    the cause's thickness brackets are its own rays at +-1 sd, and the fit recovers
+    both the cause and the thickness, where the neo-Hookean brackets cannot."""
+    from skinsuction.diagnose import FitData, fit_model
+    from skinsuction.space import RayInterpolant
+
+    pre, nodes, layered, spaces, out, notes = _pre_tension_at_given_dermis()
+    spec = spaces[BASELINE].spec
     (n,) = out["pre_tension"].nuisance
     assert n.center.cause is pre and np.allclose(n.minus.rays(6.0), layered(1.2, nodes))
     assert out[BASELINE].nuisance[0].center.cause is None
@@ -353,25 +362,7 @@ def test_a_causes_fit_starts_from_the_neo_hookean_one_with_the_thickness_in_its_
     from skinsuction.diagnose import FitData, fit_model
     from skinsuction.diagnose._fit import ModelCurves, nested_start
 
-    spec = RaySpec([6], [0.01, 0.1], load_max=100.0, load_steps=8)
-    q = np.linspace(0.0, 1.0, 9)
-    base = np.stack([q, q ** 1.6])[:, None, :]
-    pre = default_registry()["pre_tension"]
-    nodes = np.asarray(pre.nodes)
-
-    def layered(t_d, c):
-        c = np.asarray(c, dtype=float)[None, :, None]
-        return base * (1 - 1.5 * (c - 1) * q) * (1 + 0.8 * (t_d - 1.3) * np.sin(np.pi * q))
-
-    class Solver:
-        def rays(self, p, t_d, t_h, cause=None):
-            c = [1.0] if cause is None else nodes
-            return layered(t_d, c), {"rays": 2 * len(c), "stopped_early": 0, "cache": "-"}
-
-    spaces = {BASELINE: RaySpace(None, spec, np.array([np.nan]), {6.0: base}),
-              "pre_tension": RaySpace(pre, spec, nodes, {6.0: layered(1.0, nodes)})}
-    out, _ = spaces_at(spaces, [6.0], Geometry(1.3, 1.0, given=("t_d",), sd={"t_d": 0.1}),
-                       Solver())
+    pre, _, _, _, out, _ = _pre_tension_at_given_dermis()
     p = np.linspace(2.0, 40.0, 12)
     m = 0.02 * p ** 0.8
     data = {6.0: FitData(6.0, p, m, 1e-3)}

@@ -171,7 +171,8 @@ class OnDemandRays:
         if not path.exists():
             self._solve(path, ids, ref_td, ref_th)
         frame, meta = _read_parquet(path)
-        missing = [rid for rid in ids if rid not in set(frame["ray_id"])]
+        solved = set(frame["ray_id"])
+        missing = [rid for rid in ids if rid not in solved]
         if missing:  # other X1h/X1d nodes than those solved before: add them to the file
             extra = path.with_name(f"{path.stem}.extra.parquet")
             self._solve(extra, missing, ref_td, ref_th)
