@@ -87,13 +87,17 @@ def main(argv=None):
                          "file's header with a Gaussian error of this sd (e.g. 0.1): the "
                          "diagnosis then uses it, and dermis_thickness is no cause; the "
                          "neo-Hookean rays of each draw are solved on demand")
+    ap.add_argument("--given-hypodermis-sd", type=float, default=None, metavar="MM",
+                    help="also draw the hypodermis thickness (log-uniform 0.5-10 mm) and give "
+                         "it in the header with a Gaussian error of this sd (e.g. 0.2): "
+                         "hypodermis_thickness is then no cause either")
     ap.add_argument("--probe-pairs", default="2+6,4+8",
                     help="probe pairs drawn evenly (default 2+6,4+8)")
     ap.add_argument("--ray-cache", default="benchmarks/out/on_demand",
                     help="folder of the rays solved on demand")
     args = ap.parse_args(argv)
 
-    from skinsuction.diagnose._confusion import UNDIAGNOSED, summarise
+    from skinsuction.diagnose._confusion import UNDIAGNOSED, given_keywords, summarise
     from skinsuction.figures.detectability import plot_detectability
 
     spaces = _spaces(args.space_dir)
@@ -102,7 +106,10 @@ def main(argv=None):
     causes = [n for n in spaces if n != "neo_hookean"]
     if args.given_dermis_sd is not None:
         domain["given_dermis_thickness"] = {"range": (0.5, 2.5), "sd": args.given_dermis_sd}
-        causes = [n for n in causes if spaces[n].cause.keyword != "t_d"]
+    if args.given_hypodermis_sd is not None:
+        domain["given_hypodermis_thickness"] = {"range": (0.5, 10.0),
+                                                "sd": args.given_hypodermis_sd}
+    causes = [n for n in causes if spaces[n].cause.keyword not in given_keywords(domain)]
     settings = {} if args.repeats is None else {"repeats": args.repeats}
     if args.no_space_error:
         settings["space_error"] = False
@@ -120,7 +127,7 @@ def main(argv=None):
     partial = out.with_suffix(".partial.csv")
     # every draw is kept as it ends: a run given the dermis takes hours, and one cut
     # off must not lose the draws it finished
-    every = 1 if args.given_dermis_sd is not None else 10
+    every = 1 if given_keywords(domain) else 10
 
     def done(i, row):
         rows.append(row)

@@ -600,6 +600,41 @@ def test_confusion_draws_in_worker_processes_equal_one_process(monkeypatch):
     assert "detectability: 9/9 draws" in log.getvalue()
 
 
+def test_confusion_draw_with_given_layers_extends_the_dermis_only_draw(monkeypatch):
+    """A domain that also gives the hypodermis draws it last: the dermis-only draw of the
+    same seed is unchanged, t_h is in its range and given within its sd, and neither
+    given thickness is drawn as a cause."""
+    from types import SimpleNamespace
+
+    from skinsuction.diagnose import _confusion
+
+    cause = SimpleNamespace(name="pre_tension", value=lambda c, x1d: c)
+    dermis = {"given_dermis_thickness": {"range": (0.5, 2.5), "sd": 0.1}}
+    both = {**dermis, "given_hypodermis_thickness": {"range": (0.5, 10.0), "sd": 0.2}}
+    for seed in range(201000, 201040):
+        a = _confusion.draw_wide(seed, cause, dermis)
+        b = _confusion.draw_wide(seed, cause, both)
+        assert {k: v for k, v in b.items() if k not in ("t_h", "t_h_given")} == \
+            {k: v for k, v in a.items() if k not in ("t_h", "t_h_given")}
+        assert (a["t_h"], a["t_h_given"]) == (1.0, None)
+        assert 0.5 <= b["t_h"] <= 10.0 and abs(b["t_h_given"] - b["t_h"]) < 5 * 0.2 + 0.005
+    assert _confusion.given_keywords(both) == ("t_d", "t_h")
+    assert _confusion.given_keywords() == ()
+
+    drawn = []
+    monkeypatch.setattr(_confusion, "run_draw",
+                        lambda truth, seed, *a, **k: drawn.append(truth) or {"truth": truth})
+    keyword = {"dermis_thickness": "t_d", "hypodermis_thickness": "t_h",
+               "pre_tension": "prestretch"}
+    spaces = {BASELINE: None, **{n: SimpleNamespace(cause=SimpleNamespace(keyword=k))
+                                 for n, k in keyword.items()}}
+    _confusion.run_draws(spaces, 1, seed=0, domain=both)
+    assert drawn == ["none", "pre_tension"]
+    drawn.clear()
+    _confusion.run_draws(spaces, 1, seed=0, domain=dermis)
+    assert drawn == ["none", "hypodermis_thickness", "pre_tension"]
+
+
 def test_confusion_rates_over_distinguishable_draws():
     """The rates separate the misses a diagnosis could avoid from those another cause
     mimics: six detectable thickness draws, two of them mimicked by pre-tension."""

@@ -133,6 +133,17 @@ def test_the_confusion_with_the_dermis_given_is_one_job_a_draw(workdir):
     assert "results/diagnosis/confusion_given_layers/pre_tension_3" in out  # seed 1000 + 300000
 
 
+def test_the_confusion_with_both_layers_given_draws_neither_thickness(workdir):
+    overlay = {"diagnosis": {"confusion_given_layers": {"per_cause": 2,
+                                                        "hypodermis_sd_mm": 0.2}}}
+    out = snakemake(workdir, "-n", "confusion_given_layers",
+                    *write_config(workdir, "both_given", overlay)[:2])
+    assert job_counts(out)["confusion_given_layers_draw"] == 3 * 2  # none, 2 causes
+    assert "confusion_given_layers/hypodermis_thickness_" not in out
+    # one cause fewer: pre_tension is the 2nd cause (config order), seed 1000 + 200000
+    assert "results/diagnosis/confusion_given_layers/pre_tension_201000" in out
+
+
 def test_default_invocation_runs_the_paper_study(workdir):
     counts = job_counts(snakemake(workdir, "-n"))
     assert counts["simulate_point"] == 320

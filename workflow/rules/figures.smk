@@ -358,7 +358,9 @@ if "diagnosis" in config:
         # an X1h/X1d window around the neo-Hookean fit), some 15 CPU-min a draw: one job
         # a draw, so a cluster runs them side by side and a stopped run keeps its draws.
         CGL = DG["confusion_given_layers"]
-        CGL_TRUTHS = ["none"] + [n for n, c in SF_CAUSES.items() if c.keyword != "t_d"]
+        # the hypodermis is given too where its sd is set: then it is no cause either
+        CGL_GIVEN = ("t_d", "t_h") if CGL.get("hypodermis_sd_mm") is not None else ("t_d",)
+        CGL_TRUTHS = ["none"] + [n for n, c in SF_CAUSES.items() if c.keyword not in CGL_GIVEN]
         CGL_DRAWS = [f"{truth}_{int(CGL.get('seed', 1000)) + 100000 * k + i}"
                      for k, truth in enumerate(CGL_TRUTHS) for i in range(CGL["per_cause"])]
         CGL_DIR = "results/diagnosis/confusion_given_layers"
@@ -380,6 +382,10 @@ if "diagnosis" in config:
                     "given_dermis_thickness": {
                         "range": CGL.get("dermis_range_mm", [0.5, 2.5]),
                         "sd": CGL.get("dermis_sd_mm", 0.1),
+                    },
+                    "given_hypodermis_thickness": {
+                        "range": CGL.get("hypodermis_range_mm", [0.5, 10.0]),
+                        "sd": CGL.get("hypodermis_sd_mm"),
                     },
                     "probe_pairs": CGL.get("probe_pairs", [[2, 6], [4, 8]]),
                 },

@@ -11,16 +11,12 @@ with log_to_file(snakemake.log[0]):
 
     from skinsuction._files import write_table
     from skinsuction.diagnose import Settings
-    from skinsuction.diagnose._confusion import run_draw
+    from skinsuction.diagnose._confusion import domain_from_config, run_draw
     from skinsuction.space import OnDemandRays, read_ray_space
 
     spaces = {s.name: s for s in map(read_ray_space, snakemake.input.spaces)}
     settings = Settings.from_config(snakemake.params.decision, snakemake.params.fit)
-    given = snakemake.params.domain["given_dermis_thickness"]
-    domain = {"probe_pairs": tuple(tuple(float(q) for q in pair)
-                                   for pair in snakemake.params.domain["probe_pairs"]),
-              "given_dermis_thickness": {"range": tuple(given["range"]),
-                                         "sd": float(given["sd"])}}
+    domain = domain_from_config(snakemake.params.domain)
     truth, seed = snakemake.wildcards.draw.rsplit("_", 1)
     on_demand = OnDemandRays(spaces["neo_hookean"].spec,
                              cache_dir=snakemake.params.on_demand_dir)

@@ -53,6 +53,9 @@ WIDE_DOMAIN = {
     # None, or the dermis as measured by ultrasound: true t_d uniform in `range` (mm),
     # given in the file's header with a Gaussian error of `sd` (mm), stated as its sd
     "given_dermis_thickness": None,
+    # None, or the hypodermis as measured too: true t_h log-uniform in `range` (mm),
+    # given with a Gaussian error of `sd` (mm); hypodermis_thickness is then no cause
+    "given_hypodermis_thickness": None,
 }
 
 
@@ -78,7 +81,7 @@ def draw_wide(seed: int, cause, domain=None, load_max=None) -> dict:
         p_max, p_step = d["protocols"][0]
     out = {"x1d": x1d, "ratio": ratio, "noise_um": noise, "p_max": p_max, "p_step": p_step,
            "coordinate": None, "value": None, "probes": (2.0, 6.0), "t_d": 1.0,
-           "t_d_given": None}
+           "t_d_given": None, "t_h": 1.0, "t_h_given": None}
     if cause is not None:
         kind, lo, hi = d["effects"][cause.name]
         c = math.exp(rng.uniform(math.log(lo), math.log(hi))) if kind == "log" \
@@ -95,7 +98,45 @@ def draw_wide(seed: int, cause, domain=None, load_max=None) -> dict:
     if given:
         out["t_d"] = float(rng.uniform(*given["range"]))
         out["t_d_given"] = round(out["t_d"] + float(rng.normal(0.0, given["sd"])), 2)
+    # drawn last, so that a draw given the dermis alone is the one of before
+    given_h = d.get("given_hypodermis_thickness")
+    if given_h:
+        out["t_h"] = math.exp(rng.uniform(*np.log(given_h["range"])))
+        out["t_h_given"] = round(max(out["t_h"] + float(rng.normal(0.0, given_h["sd"])),
+                                     0.1), 2)
     return out
+
+
+def domain_from_config(domain: dict) -> dict:
+    """A draw domain from a workflow config (YAML lists) as :func:`draw_wide` takes it
+    (tuples; a given thickness without its sd is not given).
+
+    Examples
+    --------
+    >>> domain_from_config({"probe_pairs": [[2, 6]],
+    ...                     "given_dermis_thickness": {"range": [0.5, 2.5], "sd": 0.1},
+    ...                     "given_hypodermis_thickness": {"range": [0.5, 10], "sd": None}})
+    {'probe_pairs': ((2.0, 6.0),), 'given_dermis_thickness': {'range': (0.5, 2.5), 'sd': 0.1}}
+    """
+    out = {k: v for k, v in domain.items()
+           if k not in ("probe_pairs", "given_dermis_thickness", "given_hypodermis_thickness")}
+    if "probe_pairs" in domain:
+        out["probe_pairs"] = tuple(tuple(float(q) for q in pair)
+                                   for pair in domain["probe_pairs"])
+    for key in ("given_dermis_thickness", "given_hypodermis_thickness"):
+        given = domain.get(key)
+        if given and given.get("sd") is not None:
+            out[key] = {"range": tuple(float(x) for x in given["range"]),
+                        "sd": float(given["sd"])}
+    return out
+
+
+def given_keywords(domain=None) -> tuple:
+    """The thickness coordinates (``"t_d"``, ``"t_h"``) a domain gives in each file:
+    their causes are not drawn and not candidates."""
+    d = {**WIDE_DOMAIN, **(domain or {})}
+    return tuple(k for k, key in (("t_d", "given_dermis_thickness"),
+                                  ("t_h", "given_hypodermis_thickness")) if d.get(key))
 
 
 def _spaces_of_draw(spaces, d, on_demand):
@@ -104,8 +145,9 @@ def _spaces_of_draw(spaces, d, on_demand):
     window, as the diagnosis cuts them)."""
     from skinsuction.space import Geometry, spaces_at
 
-    g = (Geometry(d["t_d_given"], 1.0, given=("t_d",), sd={"t_d": d["t_d_sd"]})
-         if d.get("t_d_given") is not None else Geometry())
+    given = tuple(k for k in ("t_d", "t_h") if d.get(f"{k}_given") is not None)
+    g = Geometry(*(d[f"{k}_given"] if k in given else 1.0 for k in ("t_d", "t_h")),
+                 given=given, sd={k: d[f"{k}_sd"] for k in given})
 
     def spaces_for(names=None, window=None):
         chosen = spaces if names is None else {n: spaces[n] for n in names}
@@ -203,6 +245,8 @@ def _cache_key(d, mesh) -> dict:
     key = {k: d[k] for k in ("x1d", "ratio", "p_max", "p_step", "value")} | {"mesh": mesh}
     if tuple(d.get("probes") or (2.0, 6.0)) != (2.0, 6.0) or d.get("t_d", 1.0) != 1.0:
         key |= {"probes": list(d["probes"]), "t_d": d["t_d"]}
+    if d.get("t_h", 1.0) != 1.0:
+        key |= {"t_h": d["t_h"]}
     return json.loads(json.dumps(key))
 
 
@@ -251,8 +295,9 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     base = spaces[BASELINE]
     cause = None if truth == NONE else spaces[truth].cause
     d = draw_wide(seed, cause, domain, base.spec.load_max)
-    given = ({**WIDE_DOMAIN, **(domain or {})}.get("given_dermis_thickness") or {})
-    d["t_d_sd"] = given.get("sd")
+    full = {**WIDE_DOMAIN, **(domain or {})}
+    d["t_d_sd"] = (full.get("given_dermis_thickness") or {}).get("sd")
+    d["t_h_sd"] = (full.get("given_hypodermis_thickness") or {}).get("sd")
     p = np.arange(0.0, d["p_max"] + 1e-9, d["p_step"])
     t0 = time.perf_counter()
     cache_path, clean = _cached_clean(cache_dir, truth, seed, d, base.spec.mesh)
@@ -261,7 +306,7 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
                             mesh=base.spec.mesh, bottom=base.spec.bottom,
                             fallback=list(base.spec.fallback), clean=clean,
                             probes_mm=d["probes"],
-                            layers={"t_d": d["t_d"]} if d["t_d"] != 1.0 else None)
+                            layers={k: d[k] for k in ("t_d", "t_h") if d[k] != 1.0} or None)
     if cache_path is not None and clean is None:
         _save_clean(cache_path, d, base.spec.mesh, ve.clean)
     row = {"truth": truth, "seed": seed, **{k: v for k, v in d.items() if k != "probes"},
@@ -275,9 +320,10 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     row["probes"] = "+".join(f"{q:g}" for q in d["probes"])
     drawn = _spaces_of_draw(spaces, d, on_demand)
     row.update(_detectability(ve, drawn, settings, 2 * int((p > 0).sum()), truth))
-    header = ([f"dermis_thickness_mm: {d['t_d_given']:g}",
-               f"dermis_thickness_sd_mm: {d['t_d_sd']:g}"] if d["t_d_given"] is not None
-              else [])
+    header = [line for k, name in (("t_d", "dermis"), ("t_h", "hypodermis"))
+              if d[f"{k}_given"] is not None
+              for line in (f"{name}_thickness_mm: {d[f'{k}_given']:g}",
+                           f"{name}_thickness_sd_mm: {d[f'{k}_sd']:g}")]
     with tempfile.TemporaryDirectory() as tmp:
         csv = write_csv(ve, Path(tmp) / "v.csv", header=header)
         try:
@@ -398,10 +444,10 @@ def run_draws(spaces: dict, per_cause: int, seed: int = 1000, settings=None,
     """
     from skinsuction._progress import Progress
 
-    given = {**WIDE_DOMAIN, **(domain or {})}.get("given_dermis_thickness")
-    # a given dermis is no cause: the others are drawn
+    given = given_keywords(domain)
+    # a given thickness is no cause: the others are drawn
     causes = [n for n in spaces if n != BASELINE
-              and not (given and spaces[n].cause.keyword == "t_d")]
+              and not (given and spaces[n].cause.keyword in given)]
     jobs = [(truth, seed + 100000 * k + i)
             for k, truth in enumerate([NONE, *causes]) for i in range(int(per_cause))]
     bar = Progress(len(jobs), "detectability", "draws", progress) if progress else None
