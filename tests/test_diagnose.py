@@ -705,3 +705,18 @@ def test_causes_solved_in_a_window_around_the_baseline_fit_as_with_every_node(de
     # pre-tension's fit lies 1.3 decades above the baseline's X1h/X1d (the lowest node)
     assert any(n.startswith("pre_tension: its fit reached") and "widened" in n
                for n in cut["geometry"]["notes"]), cut["geometry"]["notes"]
+
+
+@pytest.mark.parametrize("tied, measurement, absent", [
+    (["pre_tension", "hypodermis_thickness"], "hypodermis thickness", "the dermis thickness"),
+    (["dermis_thickness", "pre_tension"], "dermis thickness", "hypodermis"),
+    (["pre_tension", "strain_stiffening"], "independent measurement", "thickness"),
+])
+def test_tie_advice_names_the_thickness_that_decides(tied, measurement, absent):
+    # a tie with the free hypodermis must not send the user to measure the dermis
+    from skinsuction.diagnose._diagnose import _tie_breaker_text
+    text = _tie_breaker_text(tied)
+    assert measurement in text and absent not in text, text
+    if "thickness" in measurement:
+        key = tied[0] if tied[0].endswith("thickness") else tied[1]
+        assert f"# {key}_mm:" in text and f"--{key.replace('_', '-')}-mm" in text

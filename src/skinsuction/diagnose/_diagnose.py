@@ -652,12 +652,33 @@ def _summary_text(report: dict) -> str:
         others = ", ".join(report["ambiguous_with"])
         s += (f" {others} explains both curves almost as well (BIC within "
               f"{report['settings']['ambiguity_bic']:g})")
-        s += (". Treat the two as hard to separate; an independent measurement (e.g. the "
-              "dermis thickness by ultrasound or OCT) would decide.")
+        s += ". Treat them as hard to separate; " + _tie_breaker_text(
+            [c["cause"], *report["ambiguous_with"]])
     elif report.get("runner_up"):
         r = report["runner_up"]
         s += f" Next best: {r['cause']} (BIC {r['bic_above_chosen']:.1f} higher)."
     return s
+
+
+# The measurement that settles a tie in which a layer's thickness takes part, and how
+# to give it: the curves alone cannot (docs/diagnosis.md, "With the subject's layers").
+_THICKNESS_MEASUREMENTS = {
+    "dermis_thickness": ("the dermis thickness (ultrasound or OCT)",
+                         "dermis_thickness_mm"),
+    "hypodermis_thickness": ("the hypodermis thickness (ultrasound)",
+                             "hypodermis_thickness_mm"),
+}
+
+
+def _tie_breaker_text(causes) -> str:
+    """What would decide between tied causes, naming the thickness to measure."""
+    measured = [_THICKNESS_MEASUREMENTS[c] for c in causes if c in _THICKNESS_MEASUREMENTS]
+    if not measured:
+        return "an independent measurement of one of them would decide."
+    what = " and ".join(m[0] for m in measured)
+    how = " / ".join(f"'# {m[1]}:' header line or --{m[1].replace('_', '-')}"
+                     for m in measured)
+    return f"{what} would decide: give it ({how})."
 
 
 def diagnose_file(measured_path, space_dir=None, settings: Settings | None = None,
