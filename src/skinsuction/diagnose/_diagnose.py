@@ -660,25 +660,18 @@ def _summary_text(report: dict) -> str:
     return s
 
 
-# The measurement that settles a tie in which a layer's thickness takes part, and how
-# to give it: the curves alone cannot (docs/diagnosis.md, "With the subject's layers").
-_THICKNESS_MEASUREMENTS = {
-    "dermis_thickness": ("the dermis thickness (ultrasound or OCT)",
-                         "dermis_thickness_mm"),
-    "hypodermis_thickness": ("the hypodermis thickness (ultrasound)",
-                             "hypodermis_thickness_mm"),
-}
-
-
 def _tie_breaker_text(causes) -> str:
-    """What would decide between tied causes, naming the thickness to measure."""
-    measured = [_THICKNESS_MEASUREMENTS[c] for c in causes if c in _THICKNESS_MEASUREMENTS]
-    if not measured:
+    """What would decide between tied causes: a thickness among them, measured on the
+    site, is what the curves cannot tell (docs/diagnosis.md, "With the subject's layers")."""
+    from skinsuction.measured import GEOMETRY_KEYS
+
+    keys = [f"{c}_mm" for c in causes if f"{c}_mm" in GEOMETRY_KEYS]
+    if not keys:
         return "an independent measurement of one of them would decide."
-    what = " and ".join(m[0] for m in measured)
-    how = " / ".join(f"'# {m[1]}:' header line or --{m[1].replace('_', '-')}"
-                     for m in measured)
-    return f"{what} would decide: give it ({how})."
+    what = " and ".join("the " + k.removesuffix("_mm").replace("_", " ") for k in keys)
+    how = "; ".join(f"'# {k}:' header line or --{k.replace('_', '-')}" for k in keys)
+    return (f"{what}, measured on the site (ultrasound, OCT), would decide: give "
+            f"{'it' if len(keys) == 1 else 'them'} ({how}).")
 
 
 def diagnose_file(measured_path, space_dir=None, settings: Settings | None = None,
