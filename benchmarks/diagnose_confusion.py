@@ -77,6 +77,10 @@ def main(argv=None):
     ap.add_argument("--no-space-error", action="store_true",
                     help="leave the space's correlated error out of the diagnosis "
                          "(Settings.space_error=False), for comparison")
+    ap.add_argument("--no-pattern-gate", action="store_true",
+                    help="name a decisive candidate without the smooth-pattern test firing "
+                         "first (Settings.pattern_gate=False); either way both rules' "
+                         "verdicts are in each row and both summaries are printed")
     ap.add_argument("--truths", nargs="+", default=None,
                     help="true causes to draw (default: none and every cause of the space)")
     ap.add_argument("--cache", default="benchmarks/out/diagnose_confusion_fe",
@@ -97,7 +101,8 @@ def main(argv=None):
                     help="folder of the rays solved on demand")
     args = ap.parse_args(argv)
 
-    from skinsuction.diagnose._confusion import UNDIAGNOSED, given_keywords, summarise
+    from skinsuction.diagnose._confusion import (UNDIAGNOSED, given_keywords, summarise,
+                                                 under_rule)
     from skinsuction.figures.detectability import plot_detectability
 
     spaces = _spaces(args.space_dir)
@@ -113,6 +118,8 @@ def main(argv=None):
     settings = {} if args.repeats is None else {"repeats": args.repeats}
     if args.no_space_error:
         settings["space_error"] = False
+    if args.no_pattern_gate:
+        settings["pattern_gate"] = False
     cache = args.cache or None
     jobs = [(truth, args.seed + 100000 * k + i, args.space_dir, settings, cache, domain,
              args.ray_cache)
@@ -162,6 +169,13 @@ def main(argv=None):
     print("\nPer true cause (fractions; errors are medians of |relative error|, lambda0 as "
           "lambda0 - 1):")
     print(s["rates"].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+    gate = not args.no_pattern_gate
+    if f"named_{'ungated' if gate else 'gated'}" in df:
+        other = summarise(under_rule(df, not gate), causes)
+        print(f"\nThe same fits under the rule {'without' if gate else 'with'} the pattern "
+              "gate: over its detectable draws")
+        print(other["detectable"].to_string())
+        print(other["rates"].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
     pt = df[(df["truth"] == "pre_tension") & ~df["named"].isin(UNDIAGNOSED)]
     if len(pt):
         print(f"\nInitial in-plane stress of the pre-tension draws: "

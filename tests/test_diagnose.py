@@ -720,3 +720,94 @@ def test_tie_advice_names_the_thickness_that_decides(tied, measurement, absent):
     if "thickness" in measurement:
         key = tied[0] if tied[0].endswith("thickness") else tied[1]
         assert f"# {key}_mm:" in text and f"--{key.replace('_', '-')}-mm" in text
+
+
+# ------------------------------------------------- detection: with or without the pattern gate
+def _candidate(cause, delta_bic, removes=True, at_bound=False):
+    flag = {"X1d": {"at_bound": at_bound, "neutral": False, "value": 0.1}}
+    return {"cause": cause, "bic": 100.0 + delta_bic, "decisive": delta_bic <= -10,
+            "removes_misfit": removes, "at_bound": flag}
+
+
+@pytest.mark.parametrize("base_misfit, gate, candidates, cause, verdict, tied", [
+    # the pattern test fires: either rule names the decisive candidate
+    (True, True, [("pre_tension", -30), ("strain_stiffening", -12)], "pre_tension",
+     "cause_found", []),
+    (True, False, [("pre_tension", -30), ("strain_stiffening", -12)], "pre_tension",
+     "cause_found", []),
+    # near the noise: only the ungated rule lets the candidate's BIC detect
+    (False, True, [("pre_tension", -20), ("strain_stiffening", -16)], "none",
+     "neo_hookean_fits", []),
+    (False, False, [("pre_tension", -20), ("strain_stiffening", -16)], "pre_tension",
+     "cause_found", ["strain_stiffening"]),
+    # no decisive candidate: none either way; a misfit left is said
+    (False, False, [("pre_tension", -9)], "none", "neo_hookean_fits", []),
+    (True, False, [("pre_tension", -9)], "none", "unexplained_misfit", []),
+    # a decisive candidate that leaves a misfit detects nothing on its own
+    (False, False, [("pre_tension", -40, False)], "none", "neo_hookean_fits", []),
+])
+def test_decide_with_and_without_the_pattern_gate(base_misfit, gate, candidates, cause,
+                                                  verdict, tied):
+    from skinsuction.diagnose._diagnose import decide
+
+    base_bounds = {"X1d": {"at_bound": False, "neutral": False, "value": 0.1}}
+    cands = [_candidate(*c) for c in candidates]
+    best, named, v, ambiguous, beyond, standing = decide(
+        base_misfit, 100.0, base_bounds, cands, Settings(pattern_gate=gate))
+    assert (named, v, ambiguous, beyond) == (cause, verdict, tied, [])
+    assert (best is None) == (cause == "none")
+
+
+def test_decide_flags_the_edge_of_the_model_it_stands_on_under_either_rule():
+    from skinsuction.diagnose._diagnose import decide
+
+    base_bounds = {"X1d": {"at_bound": False, "neutral": False, "value": 0.1}}
+    for gate in (True, False):
+        *_, verdict, _, beyond, standing = decide(
+            False, 100.0, base_bounds, [_candidate("pre_tension", -20, at_bound=True)],
+            Settings(pattern_gate=gate))
+        assert verdict == "beyond_space" and standing == "pre_tension" and beyond
+
+
+def test_ungated_rule_detects_as_the_likelihood_ratio_predicts_without_false_alarms():
+    # A one-parameter effect near the noise: its fitted extra parameter lowers chi^2 by
+    # a noncentral chi^2_1 with noncentrality lam, lam the drop on the noise-free curves
+    # (mean lam + 1), so the rule's delta chi^2 >= 10 + ln n (k = 1) is reached with
+    # probability ncx2.sf(10 + ln n, 1, lam).  On neo-Hookean curves the same rule must
+    # name nothing (the chi^2_1 tail beyond 14.6 is ~1e-4 per candidate).
+    from scipy import stats
+
+    from skinsuction.diagnose._fit import nested_start, with_space_error
+
+    spaces = toy_spaces()
+    noise = 2.0
+    fast = Settings(noise_um=noise, repeats=1, holdout=False, pattern_gate=False,
+                    window_focusing={"n_samples": 400, "n_best": 10, "tolerance": 1e-6,
+                                     "max_iter": 100})
+    c, seeds = 1.0075, range(300, 340)
+    clean = _toy_data(0.03, 0.02, c, "pre_tension", 0.0, 0)
+    fd = {cv.probe_mm: FitData(cv.probe_mm, cv.pressure_mbar[1:], cv.deflection_mm[1:],
+                               math.hypot(noise, fast.model_error_um)) for cv in clean.curves}
+    # the diagnosis's likelihood: the space's correlated error weighed at the baseline's X1d
+    base = fit_model(spaces[BASELINE], fd, seed=0, repeats=1)
+    fd = with_space_error(fd, base.parameters["X1d"])
+    base = fit_model(spaces[BASELINE], fd, seed=0, repeats=0, starts=[base.theta])
+    own = fit_model(spaces["pre_tension"], fd, seed=0, repeats=1,
+                    starts=[nested_start(base.theta, spaces["pre_tension"].cause)])
+    lam = base.chi2 - own.chi2
+    n = sum(d.n for d in fd.values())
+    expected = stats.ncx2.sf(-fast.delta_bic + math.log(n), 1, lam)
+    assert 0.3 < expected < 0.97  # near the noise: the regime the gate matters in
+    drops, named, alarms = [], 0, 0
+    for seed in seeds:
+        r = diagnose(_toy_data(0.03, 0.02, c, "pre_tension", noise, seed), spaces, fast)
+        drops.append(-next(x for x in r["candidates"]
+                           if x["cause"] == "pre_tension")["delta_chi2"])
+        named += r["cause"] == "pre_tension"
+        if seed < 320:
+            alarms += diagnose(_toy_data(0.03, 0.02, None, "none", noise, seed), spaces,
+                               fast)["cause"] != "none"
+    k = len(seeds)
+    assert abs(np.mean(drops) - (lam + 1)) < 3 * math.sqrt(2 * (1 + 2 * lam) / k)
+    assert abs(named / k - expected) < 3 * math.sqrt(expected * (1 - expected) / k) + 0.05
+    assert alarms == 0

@@ -70,6 +70,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--model-error-um", type=non_negative, default=d.model_error_um,
                    metavar="UM", help="accuracy of the simulated spaces in µm, added in "
                                       f"quadrature to the noise (default {d.model_error_um:g})")
+    p.add_argument("--pattern-gate", action=argparse.BooleanOptionalAction,
+                   default=d.pattern_gate,
+                   help="name a cause only once the smooth-pattern test of the neo-Hookean "
+                        "residuals fires (--no-pattern-gate: a candidate that lowers the BIC "
+                        "by --delta-bic and removes the misfit is a detection of its own; "
+                        f"default {'on' if d.pattern_gate else 'off'})")
     p.add_argument("--repeats", type=positive_int, default=d.repeats,
                    help=f"window focusing runs per fit (default {d.repeats})")
     p.add_argument("--seed", type=non_negative_int, default=d.seed,
@@ -93,7 +99,7 @@ def command(args: argparse.Namespace) -> int:
     settings = Settings(alpha=args.alpha, delta_bic=args.delta_bic, noise_um=args.noise_um,
                         model_error_um=args.model_error_um, repeats=args.repeats,
                         seed=args.seed, holdout=not args.no_holdout,
-                        level=args.level)
+                        level=args.level, pattern_gate=args.pattern_gate)
     from skinsuction.measured import is_time_curve_file
 
     if is_time_curve_file(args.measured):

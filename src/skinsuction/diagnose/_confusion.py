@@ -9,8 +9,10 @@ space's mesh), diagnosed as a user would (``diagnose_file``), and judged
 the true model are fitted by the best neo-Hookean model (on the same space),
 and the effect is detectable when what the neo-Hookean model cannot absorb
 would earn the extra parameter against pure noise (chi^2 of that misfit at
-least ``-delta_bic + ln n``, the rule's threshold) and forms a pattern the
-smooth-residual test sees.  The matrix is then reported over the detectable
+least ``-delta_bic + ln n``, the rule's threshold) and, where the rule has its
+pattern gate (``Settings.pattern_gate``), forms a pattern the smooth-residual test
+sees; each row has both (``detectable_gated``, ``detectable_ungated``) and both
+rules' verdicts on the same fits (:func:`under_rule`).  The matrix is then reported over the detectable
 draws, with the detectable fraction per cause (:func:`summarise`).  A detectable
 cause may still be mimicked by another: every cause is fitted to the same
 noise-free curves, and the draw is *distinguishable* when the best other cause
@@ -31,7 +33,7 @@ import pandas as pd
 from skinsuction.space import BASELINE, NONE
 
 __all__ = ["WIDE_DOMAIN", "draw_wide", "run_draw", "run_draws", "summarise",
-           "initial_stress_kpa"]
+           "under_rule", "initial_stress_kpa"]
 
 #: The physiological domain of the draws (forearm suction studies: E = 129 +- 88 kPa,
 #: X1d = E / 6; dermis 0.5-2.5 mm; natural tension up to tens of kPa; Cutometer noise
@@ -175,13 +177,17 @@ def _detectability(ve, spaces_for, settings, n_points, truth=None):
                       window_focusing_options=settings.window_focusing)
     except Exception:  # no neo-Hookean candidate covers the curve: beyond the space
         return {"clean_chi2": math.inf, "clean_E_um": math.nan, "clean_pattern_p": 0.0,
-                "detectable": True}
+                "detectable": True, "detectable_gated": True, "detectable_ungated": True}
     res = {p: (fd[p].pressure_mbar, f.residual_um[p]) for p in fd}
     sig = {p: fd[p].sigma_um for p in fd}
     t = misfit_test(res, sig, math.inf, settings.degree, settings.alpha)
     threshold = -settings.delta_bic + math.log(n_points)
     out = {"clean_chi2": f.chi2, "clean_E_um": f.E_um, "clean_pattern_p": t.p_value,
-           "detectable": bool(f.chi2 >= threshold and t.significant)}
+           # the rule's own noise-free threshold: a misfit that would earn the extra
+           # parameter, and (with the pattern gate) a pattern the smooth test sees
+           "detectable_gated": bool(f.chi2 >= threshold and t.significant),
+           "detectable_ungated": bool(f.chi2 >= threshold)}
+    out["detectable"] = out["detectable_" + ("gated" if settings.pattern_gate else "ungated")]
     if truth is not None and truth != NONE:
         out.update(_rivals(fd, spaces_for, settings, truth, f.theta))
     return out
@@ -347,12 +353,37 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
                base_misfit=rep["baseline"]["systematic_misfit"],
                base_x1d=rep["baseline"]["parameters"]["X1d"],
                base_x1h=rep["baseline"]["parameters"]["X1h"])
+    # the verdict of the same fits under either detection rule (Settings.pattern_gate)
+    from dataclasses import replace
+
+    from ._diagnose import decide
+
+    b = rep["baseline"]
+    for gate, tag in ((True, "gated"), (False, "ungated")):
+        _, c, v, amb, _, _ = decide(b["systematic_misfit"], b["bic"], b["at_bound"],
+                                    rep["candidates"], replace(settings, pattern_gate=gate))
+        row.update({f"named_{tag}": c, f"verdict_{tag}": v,
+                    f"ambiguous_with_{tag}": ";".join(amb)})
     named = next((c for c in rep["candidates"] if c["cause"] == rep["cause"]), None)
     if named is not None:
         sym = spaces[named["cause"]].cause.symbol
         row.update(ext_x1d=named["parameters"]["X1d"], ext_x1h=named["parameters"]["X1h"],
                    ext_value=named["parameters"][sym], delta_bic=named["delta_bic"])
     return row
+
+
+def under_rule(rows: pd.DataFrame, pattern_gate: bool) -> pd.DataFrame:
+    """The rows as the rule with or without the pattern gate would have them: its
+    ``named``, ``verdict``, ``ambiguous_with`` and ``detectable`` (each draw records
+    both rules' verdicts on the same fits, so one run compares them)."""
+    tag = "gated" if pattern_gate else "ungated"
+    out = rows.copy()
+    for col in ("named", "verdict", "ambiguous_with", "detectable"):
+        alt = f"{col}_{tag}"
+        if alt in out:
+            undiagnosed = out["named"].isin(UNDIAGNOSED) | out[alt].isna()
+            out[col] = out[alt].where(~undiagnosed, out[col])
+    return out
 
 
 #: Draws without a diagnosis: the FE run stopped, or the loader refused its curve.

@@ -8,7 +8,9 @@ Decision rule (settings in :class:`Settings`, defaults from
 ``diagnosis.decision`` of the configuration):
 
 1. the baseline (neo-Hookean) fit has a *systematic misfit*: the smooth-pattern
-   test of its residuals rejects pure noise at level ``alpha`` (0.01);
+   test of its residuals rejects pure noise at level ``alpha`` (0.01).  With
+   ``pattern_gate`` off, a candidate that passes step 2 is a detection of its own
+   (the pattern test then only says whether a misfit is left unexplained);
 2. a candidate *earns its extra parameter* if ``delta_BIC <= delta_bic``
    (-10: "very strong" evidence on the scale of Kass and Raftery, 1995; with
    ln n ~ 4.6 for 100 points this asks the extra parameter to lower chi^2 by
@@ -111,6 +113,12 @@ class Settings:
         of the neo-Hookean fit are solved (about 7 of 16 at 1.0), and the window
         widens by as much where a cause's fit reaches its outer cell; None: every
         node.  The precomputed rays are used whole.
+    pattern_gate : bool
+        True: a cause is named only where the smooth-pattern test of the neo-Hookean
+        residuals fires first (step 1 of the rule).  False: a decisive candidate that
+        removes the misfit is a detection of its own (its likelihood-ratio test of one
+        extra parameter is the more powerful near the noise); the pattern test then
+        only tells ``unexplained_misfit`` from ``neo_hookean_fits``.
     """
 
     alpha: float = 0.01
@@ -127,6 +135,7 @@ class Settings:
     window_focusing: dict = field(default_factory=lambda: dict(PAPER_WF))
     space_error: bool = True
     cause_window_decades: float | None = 1.0
+    pattern_gate: bool = True
 
     def __post_init__(self):
         if not 0 < self.alpha < 1:
@@ -143,6 +152,8 @@ class Settings:
             raise ValueError(f"intervals must be 'chosen' or 'all', got {self.intervals!r}")
         if not 0.5 <= self.level < 1:
             raise ValueError(f"level must lie in [0.5, 1), got {self.level}")
+        if not isinstance(self.pattern_gate, bool):
+            raise ValueError(f"pattern_gate must be true or false, got {self.pattern_gate!r}")
         if self.cause_window_decades is not None and not self.cause_window_decades > 0:
             raise ValueError("cause_window_decades must be positive or None, got "
                              f"{self.cause_window_decades}")
@@ -343,6 +354,63 @@ def fit_in_window(space, fit, full, decades: float, rebuild, refit):
         fit = refit(space, fit)
 
 
+def decide(base_misfit: bool, base_bic: float, base_bounds: dict, candidates: list,
+           settings: Settings):
+    """Steps 3 and 4 of the rule: the verdict from the fits (see the module docstring).
+
+    Parameters
+    ----------
+    base_misfit : bool
+        Whether the smooth-pattern test rejects the neo-Hookean residuals as noise.
+    base_bic : float
+        BIC of the neo-Hookean fit.
+    base_bounds : dict
+        Its parameters' edge flags (:func:`skinsuction.diagnose._fit.fit_bounds`).
+    candidates : list of dict
+        One per cause, with ``cause``, ``bic``, ``decisive``, ``removes_misfit`` and
+        ``at_bound``, as in the report.
+    settings : Settings
+
+    Returns
+    -------
+    tuple
+        ``(best, cause, verdict, ambiguous, beyond, standing)``: the chosen candidate
+        (or None), the cause's name, the verdict, the tied causes, the edge flags of
+        the model the verdict stands on, and that model's name.
+    """
+    eligible = [c for c in candidates if c["decisive"] and c["removes_misfit"]]
+    # with pattern_gate off a decisive candidate is a detection of its own: its
+    # targeted likelihood ratio sees a one-parameter effect that the generic
+    # pattern test (k = 5 per probe) misses near the noise
+    detected = base_misfit or not settings.pattern_gate
+    if detected and eligible:
+        best = min(eligible, key=lambda c: c["bic"])
+        # candidates that explain the data about as well (BIC within ambiguity_bic): the
+        # curves cannot separate them; the lowest BIC is named, the others reported
+        tied = [c for c in eligible if c["bic"] - best["bic"] < settings.ambiguity_bic]
+        cause, verdict = best["cause"], "cause_found"
+        ambiguous = [c["cause"] for c in tied if c is not best]
+    else:
+        best, cause, ambiguous = None, NONE, []
+        verdict = "unexplained_misfit" if base_misfit else "neo_hookean_fits"
+    # never a silent bound: the model the verdict stands on (the named cause, else the
+    # lowest BIC of all) must not sit at an edge of the simulated space
+    if best is not None:
+        standing = (best["cause"], best["at_bound"])
+    else:
+        lowest = min(candidates, key=lambda c: c["bic"], default=None)
+        standing = ((lowest["cause"], lowest["at_bound"])
+                    if lowest is not None and lowest["bic"] < base_bic
+                    else (BASELINE, base_bounds))
+    beyond = [{"model": standing[0], **f} for f in standing[1].values()
+              if f["at_bound"] and not f["neutral"]]
+    if beyond:
+        verdict = "beyond_space"
+        if cause == NONE:
+            cause = standing[0] if standing[0] != BASELINE else BEYOND_SPACE
+    return best, cause, verdict, ambiguous, beyond, standing[0]
+
+
 def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=None,
              geometry=None, on_demand=None) -> dict:
     """Diagnose loaded measured data (:class:`skinsuction.measured.MeasuredData`).
@@ -489,37 +557,13 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         })
 
     # 3. verdict
-    eligible = [c for c in candidates if c["decisive"] and c["removes_misfit"]]
-    if base_test.significant and eligible:
-        best = min(eligible, key=lambda c: c["bic"])
-        # candidates that explain the data about as well (BIC within ambiguity_bic): the
-        # curves cannot separate them; the lowest BIC is named, the others reported
-        tied = [c for c in eligible if c["bic"] - best["bic"] < settings.ambiguity_bic]
-        cause, verdict = best["cause"], "cause_found"
-        ambiguous = [c["cause"] for c in tied if c is not best]
-    else:
-        best, cause, ambiguous = None, NONE, []
-        verdict = "unexplained_misfit" if base_test.significant else "neo_hookean_fits"
-    # never a silent bound: the model the verdict stands on (the named cause, else the
-    # lowest BIC of all) must not sit at an edge of the simulated space
-    if best is not None:
-        standing = (best["cause"], best["at_bound"])
-    else:
-        lowest = min(candidates, key=lambda c: c["bic"], default=None)
-        standing = ((lowest["cause"], lowest["at_bound"])
-                    if lowest is not None and lowest["bic"] < base_bic
-                    else (BASELINE, base_bounds))
-    beyond = [{"model": standing[0], **f} for f in standing[1].values()
-              if f["at_bound"] and not f["neutral"]]
+    best, cause, verdict, ambiguous, beyond, standing = decide(
+        base_test.significant, base_bic, base_bounds, candidates, settings)
     # the intervals of the model the verdict stands on (the others' with intervals="all")
     for c in candidates:
-        if c["intervals"] is None and c["cause"] == standing[0]:
+        if c["intervals"] is None and c["cause"] == standing:
             c["intervals"] = _intervals(spaces[c["cause"]], fd, fits[c["cause"]].theta, noise,
                                         settings)
-    if beyond:
-        verdict = "beyond_space"
-        if cause == NONE:
-            cause = standing[0] if standing[0] != BASELINE else BEYOND_SPACE
     ranked = sorted(candidates, key=lambda c: c["bic"])
     runner_up = next((c for c in ranked if best is not None and c is not best), None)
 
@@ -558,6 +602,11 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         "untestable": [untestable_on_ramps()],
         "cause": cause,
         "verdict": verdict,
+        # which test saw the effect: the generic smooth-pattern test of the neo-Hookean
+        # residuals, and/or a candidate's own BIC (decisive and removing the misfit)
+        "detection": {"pattern_test": bool(base_test.significant),
+                      "candidate_bic": any(c["decisive"] and c["removes_misfit"]
+                                           for c in candidates)},
         "beyond_space": beyond,
         "extended": ({"cause": best["cause"], "parameters": best["parameters"],
                       "intervals": best["intervals"], "E_um": best["E_um"]} if best else None),
@@ -648,6 +697,10 @@ def _summary_text(report: dict) -> str:
     if g["holdout_ratio"] is not None:
         s += f", cross-probe holdout E ratio {g['holdout_ratio']:.2f}"
     s += "); its residuals are consistent with the noise."
+    if not b["systematic_misfit"]:
+        s += (" The neo-Hookean residuals alone show no smooth pattern at level "
+              f"{report['settings']['alpha']:g}: the effect is near the noise, found by the "
+              "cause's own fit.")
     if report.get("ambiguous_with"):
         others = ", ".join(report["ambiguous_with"])
         s += (f" {others} explains both curves almost as well (BIC within "
