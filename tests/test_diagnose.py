@@ -657,6 +657,33 @@ def test_confusion_rates_over_distinguishable_draws():
     assert r["distinguishable"] == 4  # of the detectable: rows 0, 1, 2 and 4
     assert r["named_right_distinguishable"] == pytest.approx(3 / 4)
     assert r["right_or_tied"] == pytest.approx(4 / 6)  # row 3 has the truth in the tie
+    assert np.isnan(r["ceiling_named_right"])  # no rival gaps in these rows
+    rows["rival_gap"] = [50.0, 50.0, 4.0, 0.0, 9.0, 1.0, 0.0]
+    r = summarise(rows, [T, P])["rates"].set_index("truth").loc[T]
+    from scipy.stats import norm
+
+    phi = norm.cdf(np.sqrt([50.0, 50.0, 4.0, 0.0, 9.0, 1.0]) / 2)
+    assert r["ceiling_named_right"] == pytest.approx(phi.mean())
+
+
+@pytest.mark.parametrize("gap", [0.5, 2.0, 4.0, 9.0])
+def test_attribution_ceiling_is_the_chance_the_noisy_chi2_prefers_the_truth(gap):
+    # Two one-parameter linear models whose directions differ by a small angle (causes
+    # that mimic each other), the truth in the first: on noise-free data the second
+    # misses by chi^2 = gap.  With unit Gaussian noise, how often is the truth's chi^2
+    # the lower?  Monte Carlo against the closed form.
+    from skinsuction.diagnose._confusion import attribution_ceiling
+
+    rng = np.random.default_rng(7)
+    c = 0.995  # cosine between the two models' directions
+    u, v = np.array([1.0, 0.0]), np.array([c, math.sqrt(1 - c * c)])
+    truth = math.sqrt(gap / (1 - c * c)) * u
+    e = rng.normal(size=(400_000, 2))
+    d = truth + e
+    chi2_true = (d ** 2).sum(1) - (d @ u) ** 2
+    chi2_rival = (d ** 2).sum(1) - (d @ v) ** 2
+    mc = float(np.mean(chi2_rival > chi2_true))
+    assert attribution_ceiling([gap])[0] == pytest.approx(mc, abs=0.01)
 
 
 # ------------------------------------------- causes' rays on demand in an X1h/X1d window

@@ -33,7 +33,7 @@ import pandas as pd
 from skinsuction.space import BASELINE, NONE
 
 __all__ = ["WIDE_DOMAIN", "draw_wide", "run_draw", "run_draws", "summarise",
-           "under_rule", "initial_stress_kpa"]
+           "under_rule", "attribution_ceiling", "initial_stress_kpa"]
 
 #: The physiological domain of the draws (forearm suction studies: E = 129 +- 88 kPa,
 #: X1d = E / 6; dermis 0.5-2.5 mm; natural tension up to tens of kPa; Cutometer noise
@@ -439,6 +439,27 @@ def summarise(rows: pd.DataFrame, causes) -> dict:
     return out
 
 
+def attribution_ceiling(rival_gap) -> np.ndarray:
+    """Chance that an ideal decision names the true cause over its nearest rival.
+
+    With noise, the chi^2 gap ``g`` between the best rival and the true cause on
+    the noise-free curves becomes ``g + 2 sqrt(g) z`` (z standard normal) when the two
+    models nearly span the same curves, as causes that mimic each other do; the
+    truth wins with probability ``Phi(sqrt(g) / 2)``: 0.5 at g = 0, 0.84 at g = 4,
+    0.89 at the tie rule's 6.  Its mean over the detectable draws bounds the rate of
+    any decision that sees only the curves (every detection granted).
+
+    Examples
+    --------
+    >>> attribution_ceiling([0.0, 4.0, np.inf]).round(3)
+    array([0.5  , 0.841, 1.   ])
+    """
+    from scipy.stats import norm
+
+    g = np.clip(np.asarray(rival_gap, dtype=float), 0.0, None)
+    return norm.cdf(np.sqrt(g) / 2)
+
+
 def _distinguishable_rates(g, truth) -> dict:
     """Over the detectable draws that the other causes cannot mimic (``rival_gap``):
     how many, and the fraction named right; empty without the column."""
@@ -451,7 +472,11 @@ def _distinguishable_rates(g, truth) -> dict:
             "named_right_distinguishable": float((d["named"] == truth).mean()) if len(d)
             else math.nan,
             "right_or_tied": float(((g["named"] == truth) | tied).mean()) if len(g)
-            else math.nan}
+            else math.nan,
+            # the mean chance of an ideal decision: what the curves allow at most
+            "ceiling_named_right": float(attribution_ceiling(
+                g["rival_gap"].fillna(np.inf)).mean())
+            if len(g) and "rival_gap" in g else math.nan}
 
 
 _SHARED: dict = {}
