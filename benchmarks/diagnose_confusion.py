@@ -77,10 +77,10 @@ def main(argv=None):
     ap.add_argument("--no-space-error", action="store_true",
                     help="leave the space's correlated error out of the diagnosis "
                          "(Settings.space_error=False), for comparison")
-    ap.add_argument("--no-pattern-gate", action="store_true",
-                    help="name a decisive candidate without the smooth-pattern test firing "
-                         "first (Settings.pattern_gate=False); either way both rules' "
-                         "verdicts are in each row and both summaries are printed")
+    ap.add_argument("--pattern-gate", action=argparse.BooleanOptionalAction, default=None,
+                    help="name a cause only once the smooth-pattern test fires first "
+                         "(Settings.pattern_gate; default: the package's, off); either way "
+                         "both rules' verdicts are in each row and both summaries printed")
     ap.add_argument("--truths", nargs="+", default=None,
                     help="true causes to draw (default: none and every cause of the space)")
     ap.add_argument("--cache", default="benchmarks/out/diagnose_confusion_fe",
@@ -118,8 +118,8 @@ def main(argv=None):
     settings = {} if args.repeats is None else {"repeats": args.repeats}
     if args.no_space_error:
         settings["space_error"] = False
-    if args.no_pattern_gate:
-        settings["pattern_gate"] = False
+    if args.pattern_gate is not None:
+        settings["pattern_gate"] = args.pattern_gate
     cache = args.cache or None
     jobs = [(truth, args.seed + 100000 * k + i, args.space_dir, settings, cache, domain,
              args.ray_cache)
@@ -169,7 +169,9 @@ def main(argv=None):
     print("\nPer true cause (fractions; errors are medians of |relative error|, lambda0 as "
           "lambda0 - 1):")
     print(s["rates"].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
-    gate = not args.no_pattern_gate
+    from skinsuction.diagnose import Settings
+
+    gate = Settings(**settings).pattern_gate
     if f"named_{'ungated' if gate else 'gated'}" in df:
         other = summarise(under_rule(df, not gate), causes)
         print(f"\nThe same fits under the rule {'without' if gate else 'with'} the pattern "

@@ -7,10 +7,13 @@ and the ray spaces; :func:`diagnose_file` reads the CSV and the spaces first;
 Decision rule (settings in :class:`Settings`, defaults from
 ``diagnosis.decision`` of the configuration):
 
-1. the baseline (neo-Hookean) fit has a *systematic misfit*: the smooth-pattern
-   test of its residuals rejects pure noise at level ``alpha`` (0.01).  With
-   ``pattern_gate`` off, a candidate that passes step 2 is a detection of its own
-   (the pattern test then only says whether a misfit is left unexplained);
+1. a *detection*: a candidate passes step 2 (its likelihood-ratio test of one
+   extra parameter, the most powerful test of that effect), or the baseline
+   (neo-Hookean) fit has a *systematic misfit*: the smooth-pattern test of its
+   residuals rejects pure noise at level ``alpha`` (0.01).  With ``pattern_gate``
+   on (the rule until 26 November 2026) only the pattern test detects; it has k = 5
+   degrees per probe against the candidate's 1, and misses effects near the noise
+   that a candidate sees (docs/diagnosis.md, "Detection near the noise");
 2. a candidate *earns its extra parameter* if ``delta_BIC <= delta_bic``
    (-10: "very strong" evidence on the scale of Kass and Raftery, 1995; with
    ln n ~ 4.6 for 100 points this asks the extra parameter to lower chi^2 by
@@ -135,7 +138,7 @@ class Settings:
     window_focusing: dict = field(default_factory=lambda: dict(PAPER_WF))
     space_error: bool = True
     cause_window_decades: float | None = 1.0
-    pattern_gate: bool = True
+    pattern_gate: bool = False
 
     def __post_init__(self):
         if not 0 < self.alpha < 1:
