@@ -363,7 +363,11 @@ def test_toy_diagnosis_names_the_hidden_cause(kind, coord, tmp_path):
     assert {"input", "noise_um", "baseline", "candidates", "cause", "extended", "gain"} <= set(back)
     for c in back["candidates"]:
         assert {"cause", "parameters", "E_um", "delta_bic", "holdout_E_um"} <= set(c)
-    assert f"Cause: `{kind}`" in paths["md"].read_text().replace("**", "")
+    md = paths["md"].read_text()
+    assert f"Cause: `{kind}`" in md.replace("**", "")
+    # the rule stated in the report is the rule applied (no pattern gate by default)
+    assert "need not show a pattern first" in md and back["detection"]["candidate_bic"] == (
+        kind != "none")
     for name in ("fit", "residuals", "gain"):
         assert paths[f"{name}_png"].stat().st_size > 1000
 

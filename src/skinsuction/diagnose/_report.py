@@ -103,8 +103,11 @@ def report_markdown(report: dict, figures=None) -> str:
         x = c["extra_parameter"]
         unit = "" if x["unit"] == "1" else f" {x['unit']}"
         flag = ("chosen" if c["cause"] == report["cause"] else
-                "decisive, but misfit left" if c["decisive"] and not c["removes_misfit"] else
-                "not decisive")
+                "tied with the chosen" if c["cause"] in (report.get("ambiguous_with") or ())
+                else "decisive, but misfit left" if c["decisive"] and not c["removes_misfit"]
+                else "not decisive" if not c["decisive"]
+                else "decisive, higher BIC" if report["cause"] != "none"
+                else "decisive, no pattern (pattern gate on)")
         bound = " (at bound)" if x["at_bound"] else ""
         lines.append(
             f"| {c['cause']} | {x['symbol']} = {x['value']:.3g}{unit}{bound} | {c['E_um']:.3g} | "
@@ -115,10 +118,15 @@ def report_markdown(report: dict, figures=None) -> str:
         "",
         f"Baseline cross-probe holdout E: {_num(b.get('holdout_E_um'))} µm.",
         "",
-        "Rule: a cause is named if the neo-Hookean residuals carry a systematic pattern, "
-        f"its ΔBIC ≤ {report['settings']['delta_bic']:g} and its own residuals pass the "
+        "Rule: a cause is named if "
+        + ("the neo-Hookean residuals carry a systematic pattern, "
+           if report["settings"].get("pattern_gate") else "")
+        + f"its ΔBIC ≤ {report['settings']['delta_bic']:g} and its own residuals pass the "
         "pattern test; among those the lowest BIC wins, and candidates within "
-        f"{report['settings']['ambiguity_bic']:g} of it are reported as a tie.",
+        f"{report['settings']['ambiguity_bic']:g} of it are reported as a tie."
+        + ("" if report["settings"].get("pattern_gate") else
+           " The cause's own fit is the detection: the neo-Hookean residuals need not "
+           "show a pattern first."),
         "",
     ]
     rows = _interval_rows("neo_hookean", b.get("intervals"))
