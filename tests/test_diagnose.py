@@ -688,6 +688,8 @@ def test_attribution_ceiling_is_the_chance_the_noisy_chi2_prefers_the_truth(gap)
     chi2_rival = (d ** 2).sum(1) - (d @ v) ** 2
     mc = float(np.mean(chi2_rival > chi2_true))
     assert attribution_ceiling([gap])[0] == pytest.approx(mc, abs=0.01)
+    # the roles swapped: the curves are the rival's, the labelled cause misses by gap
+    assert attribution_ceiling([-gap])[0] == pytest.approx(1 - mc, abs=0.01)
 
 
 # ------------------------------------------- causes' rays on demand in an X1h/X1d window

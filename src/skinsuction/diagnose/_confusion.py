@@ -446,18 +446,20 @@ def attribution_ceiling(rival_gap) -> np.ndarray:
     the noise-free curves becomes ``g + 2 sqrt(g) z`` (z standard normal) when the two
     models nearly span the same curves, as causes that mimic each other do; the
     truth wins with probability ``Phi(sqrt(g) / 2)``: 0.5 at g = 0, 0.84 at g = 4,
-    0.89 at the tie rule's 6.  Its mean over the detectable draws bounds the rate of
-    any decision that sees only the curves (every detection granted).
+    0.89 at the tie rule's 6.  A negative gap (the rival fits the truth's noise-free
+    curves better than the true cause's own space does) gives ``Phi(-sqrt(-g) / 2)``.
+    Its mean over the detectable draws bounds the rate of any decision that sees
+    only the curves (every detection granted).
 
     Examples
     --------
-    >>> attribution_ceiling([0.0, 4.0, np.inf]).round(3)
-    array([0.5  , 0.841, 1.   ])
+    >>> attribution_ceiling([0.0, 4.0, -4.0, np.inf]).round(3)
+    array([0.5  , 0.841, 0.159, 1.   ])
     """
     from scipy.stats import norm
 
-    g = np.clip(np.asarray(rival_gap, dtype=float), 0.0, None)
-    return norm.cdf(np.sqrt(g) / 2)
+    g = np.asarray(rival_gap, dtype=float)
+    return norm.cdf(np.sign(g) * np.sqrt(np.abs(g)) / 2)
 
 
 def _distinguishable_rates(g, truth) -> dict:
