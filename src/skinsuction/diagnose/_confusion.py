@@ -12,8 +12,8 @@ would earn the extra parameter against pure noise (chi^2 of that misfit at
 least ``-delta_bic + ln n``, the rule's threshold) and, where the rule has its
 pattern gate (``Settings.pattern_gate``), forms a pattern the smooth-residual test
 sees; each row has both (``detectable_gated``, ``detectable_ungated``) and both
-rules' verdicts on the same fits (:func:`under_rule`).  The matrix is then reported over the detectable
-draws, with the detectable fraction per cause (:func:`summarise`).  A detectable
+rules' verdicts on the same fits (:func:`under_rule`).  The matrix is then reported
+over the detectable draws, with the detectable fraction per cause (:func:`summarise`).  A detectable
 cause may still be mimicked by another: every cause is fitted to the same
 noise-free curves, and the draw is *distinguishable* when the best other cause
 stays at least the tie rule's BIC gap (``ambiguity_bic``) behind the true one

@@ -357,9 +357,14 @@ def fit_in_window(space, fit, full, decades: float, rebuild, refit):
         fit = refit(space, fit)
 
 
+def _eligible(candidate: dict) -> bool:
+    """Step 2 of the rule: the candidate earns its parameter and removes the misfit."""
+    return bool(candidate["decisive"] and candidate["removes_misfit"])
+
+
 def decide(base_misfit: bool, base_bic: float, base_bounds: dict, candidates: list,
            settings: Settings):
-    """Steps 3 and 4 of the rule: the verdict from the fits (see the module docstring).
+    """Steps 1, 3 and 4 of the rule: the verdict from the fits (module docstring).
 
     Parameters
     ----------
@@ -381,7 +386,7 @@ def decide(base_misfit: bool, base_bic: float, base_bounds: dict, candidates: li
         (or None), the cause's name, the verdict, the tied causes, the edge flags of
         the model the verdict stands on, and that model's name.
     """
-    eligible = [c for c in candidates if c["decisive"] and c["removes_misfit"]]
+    eligible = [c for c in candidates if _eligible(c)]
     # with pattern_gate off a decisive candidate is a detection of its own: its
     # targeted likelihood ratio sees a one-parameter effect that the generic
     # pattern test (k = 5 per probe) misses near the noise
@@ -608,8 +613,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         # which test saw the effect: the generic smooth-pattern test of the neo-Hookean
         # residuals, and/or a candidate's own BIC (decisive and removing the misfit)
         "detection": {"pattern_test": bool(base_test.significant),
-                      "candidate_bic": any(c["decisive"] and c["removes_misfit"]
-                                           for c in candidates)},
+                      "candidate_bic": any(map(_eligible, candidates))},
         "beyond_space": beyond,
         "extended": ({"cause": best["cause"], "parameters": best["parameters"],
                       "intervals": best["intervals"], "E_um": best["E_um"]} if best else None),
