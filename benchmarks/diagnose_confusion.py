@@ -2,7 +2,7 @@
 
 For each true cause (none and every cause of the scale-free space)
 ``--per-cause`` virtual experiments are drawn from seeds across the
-physiological domain (skinsuction.diagnose._confusion.WIDE_DOMAIN: X1d
+physiological domain (skinsuction.evaluation.WIDE_DOMAIN: X1d
 log-uniform 0.005-0.15 MPa, X1h/X1d 0.003-0.1, noise 1-5 µm, protocols to 100
 or 300 mbar, X2d/X1d up to 500, t_d 0.5-2.5 mm, lambda0 up to 1.25), made by
 direct FE runs on the space's mesh (both probes), written as measured CSV
@@ -54,7 +54,7 @@ _SOLVER = None
 def one_draw(job):
     global _SOLVER
     from skinsuction.diagnose import Settings
-    from skinsuction.diagnose._confusion import run_draw
+    from skinsuction.evaluation import run_draw
     from skinsuction.space import OnDemandRays
 
     truth, seed, space_dir, settings, cache, domain, ray_cache = job
@@ -101,8 +101,7 @@ def main(argv=None):
                     help="folder of the rays solved on demand")
     args = ap.parse_args(argv)
 
-    from skinsuction.diagnose._confusion import (UNDIAGNOSED, given_keywords, summarise,
-                                                 under_rule)
+    from skinsuction.evaluation import UNDIAGNOSED, given_keywords, summarise, under_rule
     from skinsuction.figures.detectability import plot_detectability
 
     spaces = _spaces(args.space_dir)

@@ -36,7 +36,7 @@ from scipy import stats
 
 from skinsuction.diagnose import Settings
 from skinsuction.diagnose._time import VISCOELASTIC_CREEP, diagnose_time_data
-from skinsuction.identify._time_virtual import mode1_suction, virtual_curve, write_time_csv
+from skinsuction.evaluation import mode1_suction, virtual_curve, write_time_csv
 from skinsuction.measured import load_time_curves
 from skinsuction.space import load_space
 from skinsuction.viscoelastic import Prony

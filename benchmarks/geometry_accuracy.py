@@ -36,7 +36,7 @@ def _init(space_dir, cache):
 
 
 def _run(job):
-    from skinsuction.diagnose._accuracy import AccuracyPoint, compare_point
+    from skinsuction.evaluation import AccuracyPoint, compare_point
     from skinsuction.space import BASELINE, Geometry, spaces_at
 
     (probe, t_d, t_h), points = job
@@ -64,7 +64,7 @@ def main(argv=None):
     ap.add_argument("--out", default="benchmarks/out/geometry_accuracy.csv")
     args = ap.parse_args(argv)
 
-    from skinsuction.diagnose._accuracy import PROTOCOLS
+    from skinsuction.evaluation import PROTOCOLS
     from skinsuction.space import BASELINE, read_ray_spaces
 
     spec = read_ray_spaces(args.space_dir)[BASELINE].spec

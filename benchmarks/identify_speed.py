@@ -29,7 +29,8 @@ import time
 import numpy as np
 from scipy.interpolate import RegularGridInterpolator
 
-from skinsuction.identify import analytic_surrogate_space, differential_evolution_fit, identify_repeated, least_squares_from_random_starts, single_objective, window_focusing
+from skinsuction.evaluation import differential_evolution_fit, least_squares_from_random_starts
+from skinsuction.identify import analytic_surrogate_space, identify_repeated, single_objective, window_focusing
 from skinsuction.space import GriddedSpace, evaluate, interpolate_pressure
 
 TRUTH = (0.0055, 0.00041)

@@ -7,7 +7,7 @@
 Draws random points across the whole domain of the space (every model, both
 probes, X1h/X1d and the cause's value over their axes, X1d log-uniform in
 0.005-0.15 MPa, protocols to 100, 300 or 500 mbar; see
-skinsuction.diagnose._accuracy), runs the FE model there on the rays' mesh with
+skinsuction.evaluation), runs the FE model there on the rays' mesh with
 their fallbacks, and compares it with the interpolated space at every pressure.
 Prints the median, 95th percentile and maximum of the relative error, of the
 absolute error and of the normalised error |dM| / max(0.2 % M, 0.3 µm) (the
@@ -38,7 +38,7 @@ def _init(space_dir):
 
 
 def _run(point):
-    from skinsuction.diagnose._accuracy import compare_point
+    from skinsuction.evaluation import compare_point
 
     return compare_point(_SPACES[point.model], point)
 
@@ -68,7 +68,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
 
     from skinsuction.space import read_ray_spaces
-    from skinsuction.diagnose._accuracy import draw_points, normalised_error
+    from skinsuction.evaluation import draw_points, normalised_error
 
     spaces = read_ray_spaces(args.space_dir)
     drawn = spaces if args.models is None else {m: spaces[m] for m in args.models}

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from skinsuction.identify._time_virtual import mode1_suction, virtual_curve, write_time_csv
+from skinsuction.evaluation import mode1_suction, virtual_curve, write_time_csv
 from skinsuction.identify.time_curves import identify_time_data
 from skinsuction.measured import load_time_curves
 from skinsuction.space import load_space

@@ -69,7 +69,8 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=1)
     args = ap.parse_args(argv)
 
-    from skinsuction.diagnose import Cause, FitData, Settings, diagnose_file, fit_model, prepare_data, registry_from_config, virtual_experiment, write_csv
+    from skinsuction.diagnose import Cause, FitData, Settings, diagnose_file, fit_model, prepare_data, registry_from_config
+    from skinsuction.evaluation import virtual_experiment, write_csv
     from skinsuction.space import RaySpec, build_ray_spaces
     from skinsuction.measured import load_measured
 

@@ -582,7 +582,7 @@ def test_confusion_draws_in_worker_processes_equal_one_process(monkeypatch):
     import io
     import os
 
-    from skinsuction.diagnose import _confusion
+    from skinsuction.evaluation import _confusion
 
     def fake_draw(truth, seed, spaces, settings=None, domain=None, cache_dir=None,
                   on_demand=None):
@@ -610,7 +610,7 @@ def test_confusion_draw_with_given_layers_extends_the_dermis_only_draw(monkeypat
     given thickness is drawn as a cause."""
     from types import SimpleNamespace
 
-    from skinsuction.diagnose import _confusion
+    from skinsuction.evaluation import _confusion
 
     cause = SimpleNamespace(name="pre_tension", value=lambda c, x1d: c)
     dermis = {"given_dermis_thickness": {"range": (0.5, 2.5), "sd": 0.1}}
@@ -644,7 +644,7 @@ def test_confusion_rates_over_distinguishable_draws():
     mimics: six detectable thickness draws, two of them mimicked by pre-tension."""
     import pandas as pd
 
-    from skinsuction.diagnose._confusion import summarise
+    from skinsuction.evaluation import summarise
 
     T, P = "dermis_thickness", "pre_tension"
     rows = pd.DataFrame({
@@ -676,7 +676,7 @@ def test_attribution_ceiling_is_the_chance_the_noisy_chi2_prefers_the_truth(gap)
     # that mimic each other), the truth in the first: on noise-free data the second
     # misses by chi^2 = gap.  With unit Gaussian noise, how often is the truth's chi^2
     # the lower?  Monte Carlo against the closed form.
-    from skinsuction.diagnose._confusion import attribution_ceiling
+    from skinsuction.evaluation import attribution_ceiling
 
     rng = np.random.default_rng(7)
     c = 0.995  # cosine between the two models' directions

@@ -35,7 +35,8 @@ import numpy as np
 import pytest
 import yaml
 
-from skinsuction.diagnose import NONE, DETECTABLE_EFFECTS, DRAW_RANGES, add_arguments, command, draw_experiment, registry_from_config, write_csv
+from skinsuction.diagnose import NONE, add_arguments, command, registry_from_config
+from skinsuction.evaluation import DETECTABLE_EFFECTS, DRAW_RANGES, draw_experiment, write_csv
 from skinsuction.space import RaySpec, build_ray_spaces
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -126,7 +127,7 @@ def test_thick_dermis_and_pre_tension_tie_is_reported(ci_spaces, tmp_path):
 
 def test_replicates_give_the_noise_and_the_same_verdict(ci_spaces, tmp_path):
     space_dir, spec, causes, _ = ci_spaces
-    from skinsuction.diagnose import virtual_experiment
+    from skinsuction.evaluation import virtual_experiment
 
     ve = virtual_experiment(0.028, 0.028 * 0.01, None, None, noise_um=3.0, seed=5,
                             mesh=spec.mesh, replicates=3)
@@ -143,7 +144,7 @@ def test_replicates_give_the_noise_and_the_same_verdict(ci_spaces, tmp_path):
 def test_one_probe_file(ci_spaces, tmp_path):
     space_dir, spec, causes, _ = ci_spaces
     c = causes["strain_stiffening"]
-    from skinsuction.diagnose import virtual_experiment
+    from skinsuction.evaluation import virtual_experiment
 
     ve = virtual_experiment(0.026, 0.026 * 0.008, c, 12 * 0.026, noise_um=1.5, seed=6,
                             mesh=spec.mesh, probes_mm=(6.0,))
@@ -164,7 +165,7 @@ CI_ACCURACY = 0.08
 def test_scale_free_space_matches_direct_fe_runs(ci_spaces):
     """A handful of random points across the domain: FE on the rays' mesh vs the space."""
     from skinsuction.space import read_ray_spaces
-    from skinsuction.diagnose._accuracy import compare_point, draw_points
+    from skinsuction.evaluation import compare_point, draw_points
 
     space_dir, spec, causes, _ = ci_spaces
     spaces = read_ray_spaces(space_dir)
@@ -180,7 +181,7 @@ def test_scale_free_space_matches_direct_fe_runs(ci_spaces):
     assert 1e-6 < median < CI_ACCURACY / 4
 
 
-#: The physiological domain of the confusion benchmark (skinsuction.diagnose._confusion),
+#: The physiological domain of the confusion benchmark (skinsuction.evaluation.WIDE_DOMAIN),
 #: within the coarse ci space's axes (X2d/X1d to 30, t_d 0.6-2.2 mm).
 CI_DOMAIN = {
     "x1d_mpa": (0.008, 0.15),
@@ -211,7 +212,7 @@ def test_wide_domain_effect_is_named_where_detectable(ci_spaces, cause, seed):
     no false alarm."""
     from skinsuction.diagnose import Settings
     from skinsuction.space import read_ray_spaces
-    from skinsuction.diagnose._confusion import run_draw
+    from skinsuction.evaluation import run_draw
 
     space_dir, spec, causes, _ = ci_spaces
     spaces = read_ray_spaces(space_dir)
@@ -233,7 +234,7 @@ def test_rivals_of_a_cause_are_fitted_on_its_noise_free_curves(ci_spaces):
     and the draw is distinguishable exactly when the gap reaches the tie rule's."""
     from skinsuction.diagnose import Settings
     from skinsuction.space import read_ray_spaces
-    from skinsuction.diagnose._confusion import run_draw
+    from skinsuction.evaluation import run_draw
 
     space_dir, spec, causes, _ = ci_spaces
     spaces = read_ray_spaces(space_dir)

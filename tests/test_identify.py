@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from scipy.interpolate import BarycentricInterpolator
 
-from skinsuction.identify import PAPER_PRESSURE_MBAR, PAPER_X1D, PAPER_X1H, IdentificationError, analytic_surrogate_space, correlation_error, cost, differential_evolution_fit, identify_repeated, least_squares_from_random_starts, ratio_objective, samples_for, single_objective, surrogate_deflection, weighted_objective, window_focusing
+from skinsuction.identify import PAPER_PRESSURE_MBAR, PAPER_X1D, PAPER_X1H, IdentificationError, analytic_surrogate_space, correlation_error, cost, identify_repeated, ratio_objective, samples_for, single_objective, surrogate_deflection, weighted_objective, window_focusing
+from skinsuction.evaluation import differential_evolution_fit, least_squares_from_random_starts
 from skinsuction.space import GriddedSpace, LagrangeAxis, SpaceInterpolant, evaluate, interpolate_pressure
 
 TRUTH = np.array([0.0055, 0.00041])  # the paper's test parameters (section 3.2)

@@ -2,10 +2,10 @@
 
 Layers, lowest first (docs/workflow.md#layout): the shared helpers, the model,
 its viscoelastic extension, the simulated space, the figures (drawing plain tables), identify, diagnose,
-then the studies (paper, cohort) and the command line.  A module may import
-from its own layer and the layers below, never from above, so the forward
-model knows nothing of spaces and the paper's study is not needed to identify
-or diagnose a curve.  Imports inside functions count: they are arrows too.
+then the studies (paper, cohort, and evaluation: the study of the method) and the
+command line.  A module may import from its own layer and the layers below, never
+from above, so the forward model knows nothing of spaces and neither the paper's
+study nor the evaluation of the method is needed to identify or diagnose a curve.  Imports inside functions count: they are arrows too.
 """
 
 import ast
@@ -25,7 +25,7 @@ LAYERS = [
     {"figures"},
     {"identify"},
     {"diagnose"},
-    {"paper", "cohort"},
+    {"paper", "cohort", "evaluation"},
     {"cli", "__main__", "__init__"},
 ]
 LAYER_OF = {name: i for i, layer in enumerate(LAYERS) for name in layer}

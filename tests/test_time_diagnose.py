@@ -14,7 +14,7 @@ import pytest
 from skinsuction.cli import main
 from skinsuction.diagnose import Settings
 from skinsuction.diagnose._time import VISCOELASTIC_CREEP, diagnose_time_data
-from skinsuction.identify._time_virtual import mode1_suction, virtual_curve, write_time_csv
+from skinsuction.evaluation import mode1_suction, virtual_curve, write_time_csv
 from skinsuction.measured import load_time_curves
 from skinsuction.space import load_space
 from skinsuction.viscoelastic import Prony

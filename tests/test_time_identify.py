@@ -15,6 +15,7 @@ import pytest
 
 from skinsuction.cli import main
 from skinsuction.errors import InputError
+from skinsuction.evaluation import mode1_suction, mode2_suction, virtual_curve, write_time_csv
 from skinsuction.identify._time_fit import (
     _segments,
     decorrelate_low_rank,
@@ -26,8 +27,6 @@ from skinsuction.identify._time_fit import (
     whitened_systematic,
 )
 from skinsuction.identify._time_model import ElasticRays, effective_pressures, retardation
-from skinsuction.identify._time_virtual import mode1_suction, mode2_suction, virtual_curve, \
-    write_time_csv
 from skinsuction.identify.time_curves import identify_time_data
 from skinsuction.measured import load_time_curves
 from skinsuction.space import RayInterpolant, load_space

@@ -46,6 +46,10 @@ _EXPORTS = {
     "Progress": "skinsuction._progress",
     # figures
     "plot_fig3": "skinsuction.figures.fig3",
+    # the classical optimisers the window focusing is compared with (once in identify)
+    "BaselineResult": "skinsuction.evaluation",
+    "least_squares_from_random_starts": "skinsuction.evaluation",
+    "differential_evolution_fit": "skinsuction.evaluation",
 }
 
 __all__ = sorted(_EXPORTS) + ["__version__"]

@@ -53,7 +53,7 @@ DIAGNOSIS_OUTPUTS = [
 
 # The synthetic example of data/ is shipped, not made by the workflow (a rule
 # producing a tracked file reruns whenever its code changes); remake it by hand
-# with:  python -m skinsuction.diagnose.example data/example_suction_synthetic.csv
+# with:  python -m skinsuction.evaluation.example data/example_suction_synthetic.csv
 
 
 rule diagnose_measured:
@@ -121,7 +121,7 @@ rule diagnosis_fe_check:
         mesh=SF_SPEC.mesh,
         bottom=SF_SPEC.bottom,
         causes=SF["causes"],
-        code=code_hash("diagnose", *FE_RAY_CODE),
+        code=code_hash("evaluation", "diagnose", *FE_RAY_CODE),
     threads: 1
     resources:
         mem_mb=2000,

@@ -342,7 +342,8 @@ if "diagnosis" in config:
                 seed=DG["confusion"].get("seed", 1000),
                 decision=DG.get("decision", {}),
                 fit=DG.get("fit", {}),
-                code=code_hash("diagnose", "identify", "model", "figures", *SPACE_CODE),
+                code=code_hash("evaluation", "diagnose", "identify", "model", "figures",
+                               *SPACE_CODE),
             threads: 2
             resources:
                 mem_mb=3000,
@@ -392,7 +393,7 @@ if "diagnosis" in config:
                 on_demand_dir="results/simulated_space/on_demand",
                 decision=DG.get("decision", {}),
                 fit=DG.get("fit", {}),
-                code=code_hash("diagnose", "identify", "model", *SPACE_CODE),
+                code=code_hash("evaluation", "diagnose", "identify", "model", *SPACE_CODE),
             threads: 1
             resources:
                 mem_mb=2000,
@@ -422,7 +423,7 @@ if "diagnosis" in config:
                 "logs/diagnosis/confusion_given_layers.log",
             params:
                 causes=CGL_TRUTHS[1:],
-                code=code_hash("diagnose", "figures"),
+                code=code_hash("evaluation", "diagnose", "figures"),
             threads: 1
             resources:
                 mem_mb=2000,

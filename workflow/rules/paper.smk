@@ -55,6 +55,10 @@ ID_TEST_POINTS = [
 ID_CURVES = "results/identification/test_curves.csv"
 ID_CODE = code_hash("paper", "identify", *SPACE_CODE, "measured")
 ID_FIG_CODE = code_hash("paper", "identify", "figures", *SPACE_CODE, "measured")
+#: the optimiser comparison also runs the classical optimisers of skinsuction.evaluation
+ID_OPT_CODE = code_hash(
+    "paper", "identify", "figures", "evaluation/_baselines.py", *SPACE_CODE, "measured"
+)
 
 IDENTIFICATION_OUTPUTS = [
     "results/figures/fig4_single_probe.png",
@@ -235,7 +239,7 @@ rule optimiser_comparison:
         "results/benchmarks/identification/optimiser_comparison.tsv"
     params:
         settings=ID,
-        code=ID_FIG_CODE,
+        code=ID_OPT_CODE,
     threads: 1
     resources:
         mem_mb=2000,

@@ -11,7 +11,7 @@ with log_to_file(snakemake.log[0]):
 
     from skinsuction._files import write_table
     from skinsuction.diagnose import Settings
-    from skinsuction.diagnose._confusion import domain_from_config, run_draw
+    from skinsuction.evaluation import domain_from_config, run_draw
     from skinsuction.space import OnDemandRays, read_ray_space
 
     spaces = {s.name: s for s in map(read_ray_space, snakemake.input.spaces)}

@@ -6,7 +6,7 @@ with log_to_file(snakemake.log[0]):
     import pandas as pd
 
     from skinsuction._files import write_table
-    from skinsuction.diagnose._confusion import summarise
+    from skinsuction.evaluation import summarise
     from skinsuction.figures.detectability import plot_detectability
 
     rows = pd.concat([pd.read_csv(f) for f in snakemake.input.rows], ignore_index=True)

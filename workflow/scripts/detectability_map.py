@@ -14,7 +14,7 @@ with log_to_file(snakemake.log[0]):
 
     from skinsuction.diagnose import Settings
     from skinsuction.space import read_ray_space
-    from skinsuction.diagnose._confusion import run_draws, summarise
+    from skinsuction.evaluation import run_draws, summarise
     from skinsuction.figures.detectability import plot_detectability
     from skinsuction._files import write_table
 

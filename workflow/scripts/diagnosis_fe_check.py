@@ -12,7 +12,7 @@ from skinsuction.provenance import log_to_file  # noqa: E402
 
 with log_to_file(snakemake.log[0]):
     from skinsuction.diagnose import registry_from_config
-    from skinsuction.diagnose._check import fe_check
+    from skinsuction.evaluation import fe_check
     from skinsuction._files import write_table
 
     with open(snakemake.input.report, encoding="utf-8") as f:

@@ -29,30 +29,34 @@
 Parameters are in MPa (moduli), mm (thickness), 1 (lambda0); E is eq. 7 of the
 paper in µm on the concatenated fitted points.  See :mod:`._rays` for the ray
 spaces, :mod:`._stats` for the statistics and :mod:`._diagnose` for the rule.
+How well the rule does (virtual experiments, confusion rates, the space's accuracy)
+is studied in :mod:`skinsuction.evaluation`, which this package does not import.
 """
 
 from skinsuction.space import BASELINE, DEFAULT_CAUSES, NONE, Cause, default_registry, registry_from_config
 from ._cli import add_arguments, command
-from ._diagnose import Settings, diagnose, diagnose_file, prepare_data
-from ._fit import Fit, FitData, ModelCurves, fit_model
+from ._diagnose import (
+    BeyondSpaceError,
+    Settings,
+    decide,
+    diagnose,
+    diagnose_file,
+    fit_in_window,
+    prepare_data,
+    ratio_window,
+)
+from ._fit import Fit, FitData, ModelCurves, fit_model, nested_start
 from ._report import write_report
 from ._stats import bic, misfit_test, noise_from_differences, noise_from_replicates
-from ._virtual import (
-    DETECTABLE_EFFECTS,
-    DRAW_RANGES,
-    VirtualExperiment,
-    draw_experiment,
-    virtual_experiment,
-    write_csv,
-)
+from ._time import VISCOELASTIC_CREEP, diagnose_time_data, diagnose_time_file, write_time_report
 
 __all__ = [
     "BASELINE", "NONE", "Cause", "DEFAULT_CAUSES", "default_registry", "registry_from_config",
     "add_arguments", "command",
     "Settings", "diagnose", "diagnose_file", "prepare_data",
-    "Fit", "FitData", "ModelCurves", "fit_model",
+    "BeyondSpaceError", "decide", "fit_in_window", "ratio_window",
+    "Fit", "FitData", "ModelCurves", "fit_model", "nested_start",
     "write_report",
     "bic", "misfit_test", "noise_from_differences", "noise_from_replicates",
-    "DETECTABLE_EFFECTS", "DRAW_RANGES", "VirtualExperiment", "draw_experiment",
-    "virtual_experiment", "write_csv",
+    "VISCOELASTIC_CREEP", "diagnose_time_data", "diagnose_time_file", "write_time_report",
 ]

@@ -20,7 +20,6 @@ Examples
 from ._bounds import BOUND_FRACTION, bound_flags
 from ._polish import polish
 from ._intervals import Interval, LikelihoodIntervals, interval_threshold, profile_intervals
-from ._baselines import BaselineResult, differential_evolution_fit, least_squares_from_random_starts
 from ._objectives import (
     RatioObjective,
     SingleObjective,
@@ -73,9 +72,6 @@ __all__ = [
     "IterationState",
     "WindowFocusingResult",
     "RepeatedIdentification",
-    "BaselineResult",
-    "least_squares_from_random_starts",
-    "differential_evolution_fit",
     "PAPER_X1D",
     "PAPER_X1H",
     "PAPER_PRESSURE_MBAR",

@@ -16,7 +16,7 @@ import pandas as pd
 
 log = logging.getLogger(__name__)
 
-from skinsuction.identify import differential_evolution_fit, least_squares_from_random_starts
+from skinsuction.evaluation import differential_evolution_fit, least_squares_from_random_starts
 
 from ._runs import _success
 from ._setup import PAPER_TIMING, StudySetup, build_objective, case_seed, load_spaces, target_of

@@ -12,8 +12,9 @@ would earn the extra parameter against pure noise (chi^2 of that misfit at
 least ``-delta_bic + ln n``, the rule's threshold) and, where the rule has its
 pattern gate (``Settings.pattern_gate``), forms a pattern the smooth-residual test
 sees; each row has both (``detectable_gated``, ``detectable_ungated``) and both
-rules' verdicts on the same fits (:func:`under_rule`).  The matrix is then reported
-over the detectable draws, with the detectable fraction per cause (:func:`summarise`).  A detectable
+rules' verdicts on the same fits (:func:`~skinsuction.evaluation.under_rule`).  The matrix
+is then reported over the detectable draws, with the detectable fraction per cause
+(:func:`~skinsuction.evaluation.summarise`, in :mod:`._rates`).  A detectable
 cause may still be mimicked by another: every cause is fitted to the same
 noise-free curves, and the draw is *distinguishable* when the best other cause
 stays at least the tie rule's BIC gap (``ambiguity_bic``) behind the true one
@@ -32,8 +33,8 @@ import pandas as pd
 
 from skinsuction.space import BASELINE, NONE
 
-__all__ = ["WIDE_DOMAIN", "draw_wide", "run_draw", "run_draws", "summarise",
-           "under_rule", "attribution_ceiling", "initial_stress_kpa"]
+__all__ = ["WIDE_DOMAIN", "draw_wide", "domain_from_config", "given_keywords", "run_draw",
+           "run_draws", "initial_stress_kpa"]
 
 #: The physiological domain of the draws (forearm suction studies: E = 129 +- 88 kPa,
 #: X1d = E / 6; dermis 0.5-2.5 mm; natural tension up to tens of kPa; Cutometer noise
@@ -163,8 +164,7 @@ def _detectability(ve, spaces_for, settings, n_points, truth=None):
     """Best neo-Hookean fit to the noise-free true curves: chi^2, E, pattern test;
     for a cause, also how well each other cause mimics it (:func:`_rivals`).
     ``spaces_for``: see :func:`_spaces_of_draw`."""
-    from ._fit import FitData, fit_model
-    from ._stats import misfit_test
+    from skinsuction.diagnose import FitData, fit_model, misfit_test
 
     fd = {}
     for probe, m in ve.clean.items():
@@ -207,8 +207,7 @@ def _rivals(fd, spaces_for, settings, truth, base_theta):
     """
     from skinsuction.identify import IdentificationError
 
-    from ._diagnose import fit_in_window, ratio_window
-    from ._fit import fit_model, nested_start
+    from skinsuction.diagnose import fit_in_window, fit_model, nested_start, ratio_window
 
     decades = settings.cause_window_decades
     window = None if decades is None else ratio_window(base_theta, decades)
@@ -294,7 +293,8 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     """
     from skinsuction.measured import MeasuredDataError
 
-    from ._diagnose import BeyondSpaceError, Settings, diagnose_file
+    from skinsuction.diagnose import BeyondSpaceError, Settings, diagnose_file
+
     from ._virtual import virtual_experiment, write_csv
 
     settings = settings or Settings()
@@ -356,7 +356,7 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     # the verdict of the same fits under either detection rule (Settings.pattern_gate)
     from dataclasses import replace
 
-    from ._diagnose import decide
+    from skinsuction.diagnose import decide
 
     b = rep["baseline"]
     for gate, tag in ((True, "gated"), (False, "ungated")):
@@ -370,115 +370,6 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
         row.update(ext_x1d=named["parameters"]["X1d"], ext_x1h=named["parameters"]["X1h"],
                    ext_value=named["parameters"][sym], delta_bic=named["delta_bic"])
     return row
-
-
-def under_rule(rows: pd.DataFrame, pattern_gate: bool) -> pd.DataFrame:
-    """The rows as the rule with or without the pattern gate would have them: its
-    ``named``, ``verdict``, ``ambiguous_with`` and ``detectable`` (each draw records
-    both rules' verdicts on the same fits, so one run compares them)."""
-    tag = "gated" if pattern_gate else "ungated"
-    out = rows.copy()
-    for col in ("named", "verdict", "ambiguous_with", "detectable"):
-        alt = f"{col}_{tag}"
-        if alt in out:
-            undiagnosed = out["named"].isin(UNDIAGNOSED) | out[alt].isna()
-            out[col] = out[alt].where(~undiagnosed, out[col])
-    return out
-
-
-#: Draws without a diagnosis: the FE run stopped, or the loader refused its curve.
-UNDIAGNOSED = ("fe_failed", "input_rejected")
-
-
-def summarise(rows: pd.DataFrame, causes) -> dict:
-    """Confusion matrices (all and detectable draws), rates and parameter errors."""
-    labels = [NONE, *causes]
-    rows = rows.copy()
-    for col in ("base_x1d", "ext_x1d", "ext_value", "value", "detectable", "verdict"):
-        if col not in rows:
-            rows[col] = np.nan
-    ok = rows[~rows["named"].isin(UNDIAGNOSED)].copy()
-    ok["detectable"] = ok["detectable"].fillna(True).astype(bool)
-    det = ok[(ok["truth"] == NONE) | ok["detectable"]]
-    cols = labels + sorted(set(ok["named"]) - set(labels))
-
-    def matrix(frame):
-        return pd.crosstab(frame["truth"], frame["named"]).reindex(
-            index=labels, columns=cols, fill_value=0)
-
-    out = {"all": matrix(ok), "detectable": matrix(det)}
-    rates = []
-    for truth in labels:
-        g_all = ok[ok["truth"] == truth]
-        g = det[det["truth"] == truth]
-        r = {"truth": truth, "draws": len(g_all), "fe_failed":
-             int(((rows["truth"] == truth) & (rows["named"] == "fe_failed")).sum()),
-             "input_rejected":
-             int(((rows["truth"] == truth) & (rows["named"] == "input_rejected")).sum()),
-             "detectable": len(g) if truth != NONE else len(g_all),
-             "detectable_fraction": (len(g) / len(g_all)) if len(g_all) and truth != NONE
-             else math.nan,
-             "named_right": float((g["named"] == truth).mean()) if len(g) else math.nan,
-             **_distinguishable_rates(g, truth),
-             "beyond_space": float((g["verdict"] == "beyond_space").mean()) if len(g) else
-             math.nan}
-        hit = g[g["named"] == truth]
-        if truth == NONE:
-            r["false_alarm"] = float((g["named"] != NONE).mean()) if len(g) else math.nan
-            r["x1d_error_median"] = float((hit["base_x1d"] / hit["x1d"] - 1).abs().median())
-        elif len(hit):
-            r["x1d_error_median"] = float((hit["ext_x1d"] / hit["x1d"] - 1).abs().median())
-            if truth == "pre_tension":
-                r["extra_error_median"] = float(((hit["ext_value"] - 1) / (hit["value"] - 1)
-                                                 - 1).abs().median())
-            else:
-                r["extra_error_median"] = float((hit["ext_value"] / hit["value"] - 1)
-                                                .abs().median())
-        rates.append(r)
-    out["rates"] = pd.DataFrame(rates)
-    return out
-
-
-def attribution_ceiling(rival_gap) -> np.ndarray:
-    """Chance that an ideal decision names the true cause over its nearest rival.
-
-    With noise, the chi^2 gap ``g`` between the best rival and the true cause on
-    the noise-free curves becomes ``g + 2 sqrt(g) z`` (z standard normal) when the two
-    models nearly span the same curves, as causes that mimic each other do; the
-    truth wins with probability ``Phi(sqrt(g) / 2)``: 0.5 at g = 0, 0.84 at g = 4,
-    0.89 at the tie rule's 6.  A negative gap (the rival fits the truth's noise-free
-    curves better than the true cause's own space does) gives ``Phi(-sqrt(-g) / 2)``.
-    Its mean over the detectable draws bounds the rate of any decision that sees
-    only the curves (every detection granted).
-
-    Examples
-    --------
-    >>> attribution_ceiling([0.0, 4.0, -4.0, np.inf]).round(3)
-    array([0.5  , 0.841, 0.159, 1.   ])
-    """
-    from scipy.stats import norm
-
-    g = np.asarray(rival_gap, dtype=float)
-    return norm.cdf(np.sign(g) * np.sqrt(np.abs(g)) / 2)
-
-
-def _distinguishable_rates(g, truth) -> dict:
-    """Over the detectable draws that the other causes cannot mimic (``rival_gap``):
-    how many, and the fraction named right; empty without the column."""
-    if truth == NONE or "distinguishable" not in g:
-        return {}
-    d = g[g["distinguishable"].fillna(True).astype(bool)]
-    tied = (g["ambiguous_with"] if "ambiguous_with" in g else pd.Series("", index=g.index))
-    tied = tied.fillna("").astype(str).str.split(";").apply(lambda a: truth in a)
-    return {"distinguishable": len(d),
-            "named_right_distinguishable": float((d["named"] == truth).mean()) if len(d)
-            else math.nan,
-            "right_or_tied": float(((g["named"] == truth) | tied).mean()) if len(g)
-            else math.nan,
-            # the mean chance of an ideal decision: what the curves allow at most
-            "ceiling_named_right": float(attribution_ceiling(
-                g["rival_gap"].fillna(np.inf)).mean())
-            if len(g) and "rival_gap" in g else math.nan}
 
 
 _SHARED: dict = {}

@@ -7,7 +7,7 @@ hidden effect, both probes, 51 pressures 0, 2, ..., 100 mbar, and Gaussian
 noise of sd 2.5 µm on every deflection at p > 0 (a Cutometer reads the apex to
 about 1-10 µm), NumPy seed 2024.
 
-    python -m skinsuction.diagnose.example [OUT.csv]
+    python -m skinsuction.evaluation.example [OUT.csv]
 """
 
 from __future__ import annotations
@@ -34,8 +34,8 @@ EXAMPLE = {
 def make_example(out="data/example_suction_synthetic.csv", params=None):
     """Run the FE model and write the example CSV (a few minutes on one core)."""
     from skinsuction.provenance import git_info
-
     from skinsuction.space import default_registry
+
     from ._virtual import virtual_experiment, write_csv
 
     e = {**EXAMPLE, **(params or {})}
@@ -49,7 +49,7 @@ def make_example(out="data/example_suction_synthetic.csv", params=None):
     commit = (info.get("commit") or "unknown") + (" (working tree with uncommitted changes)"
                                                    if info.get("dirty") else "")
     header = [
-        "Made by skinsuction.diagnose.example.make_example (python -m skinsuction.diagnose.example)",
+        "Made by skinsuction.evaluation.example.make_example (python -m skinsuction.evaluation.example)",
         "with the skinsuction FE model on a fine mesh (refinement 2), fixed bottom, hypodermis 1 mm,",
         "a hidden effect (true_cause below) and Gaussian noise on every deflection at p > 0.",
         "subject: synthetic",

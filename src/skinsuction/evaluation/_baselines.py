@@ -1,7 +1,7 @@
 """Classical optimisers on the same interpolated simulated space, for comparison.
 
-Both work on an objective of ``_objectives`` (so on exactly the same cost as the
-window focusing) inside the bounds of the space, and return a
+Both work on an objective of :mod:`skinsuction.identify` (so on exactly the same cost
+as the window focusing) inside the bounds of the space, and return a
 :class:`BaselineResult`.  ``n_evaluations`` counts candidates evaluated (one
 candidate = one interpolated curve set), as in the window focusing result.
 """
