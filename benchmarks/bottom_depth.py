@@ -14,7 +14,7 @@ import argparse
 
 import numpy as np
 
-from skinsuction.model import simulate
+from skinsuction.model import Skin, simulate
 
 
 def main(argv=None):
@@ -31,8 +31,7 @@ def main(argv=None):
     for r in (1e-3, 0.03, 0.3, 1.0, 2.0):
         before = None
         for d in depths:
-            c = simulate(0.01, 0.01 * r, t_d=args.t_d, t_h=d * a, probe_mm=args.probe,
-                         pressures_mbar=p)
+            c = simulate(Skin.two_layer(0.01, 0.01 * r, t_d=args.t_d, t_h=d * a), probe=args.probe, pressures_mbar=p)
             m = np.full(p.size, np.nan)
             m[: len(c.deflection_mm)] = c.deflection_mm
             if not c.converged:

@@ -44,14 +44,14 @@ def _draw(job):
     from skinsuction.diagnose._diagnose import Settings, diagnose
     from skinsuction.identify.measured_fit import identify_data
     from skinsuction.measured import MeasuredCurve, MeasuredData
-    from skinsuction.model import simulate
+    from skinsuction.model import Skin, simulate
     from skinsuction.space import Geometry
 
     i, seed, (probes, t_d, t_h, x1d, ratio) = job
     rng = np.random.default_rng(seed)
     curves = []
     for p in probes:
-        c = simulate(x1d, x1d * ratio, t_d=t_d, t_h=t_h, probe_mm=p, pressures_mbar=P)
+        c = simulate(Skin.two_layer(x1d, x1d * ratio, t_d=t_d, t_h=t_h), probe=p, pressures_mbar=P)
         if not c.converged:
             return {"draw": i, "error": f"FE stopped at {c.last_converged_mbar:g} mbar"}
         m = np.asarray(c.deflection_mm) + rng.normal(0.0, NOISE_MM, P.size)

@@ -19,14 +19,14 @@ import sys
 
 import numpy as np
 
-from skinsuction.model import simulate
+from skinsuction.model import Skin, simulate
 from skinsuction.space import LagrangeAxis
 
 P = np.linspace(0, 200, 21)
 
 
 def deflection(td, th, r):
-    c = simulate(0.01, 0.01 * r, t_d=td, t_h=th, probe_mm=2, pressures_mbar=P)
+    c = simulate(Skin.two_layer(0.01, 0.01 * r, t_d=td, t_h=th), probe=2, pressures_mbar=P)
     m = np.full(P.size, np.nan)
     d = np.asarray(c.deflection_mm)
     m[:d.size] = d

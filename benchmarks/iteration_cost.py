@@ -22,7 +22,7 @@ import felupe as fem
 import numpy as np
 from scipy.sparse.linalg import splu
 
-from skinsuction.model import SuctionTest
+from skinsuction.model import Skin, SuctionTest
 from skinsuction.model._fast import _SUPERLU_OPTIONS
 
 
@@ -47,8 +47,7 @@ def main():
 
     models = {}
     for engine in ("felupe", "fast"):
-        m = SuctionTest(0.01, 0.01 * args.ratio, t_d=args.td, probe_mm=args.probe,
-                        mesh={"engine": engine})
+        m = SuctionTest(Skin.two_layer(0.01, 0.01 * args.ratio, t_d=args.td), probe=args.probe, mesh={"engine": engine})
         m.run(np.linspace(0.0, args.pressure, 16))
         models[engine] = m
     old, new = models["felupe"], models["fast"]

@@ -19,7 +19,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
 
-from skinsuction.model import SuctionTest  # noqa: E402
+from skinsuction.model import Skin, SuctionTest  # noqa: E402
 
 POINTS = [  # (probe_mm, X1d, X1h) in MPa
     (2, 0.001, 1.01e-3),
@@ -41,7 +41,7 @@ VARIANTS = {
 
 def run(job):
     (probe, x1d, x1h), name = job
-    model = SuctionTest(x1d, x1h, probe_mm=probe, mesh=VARIANTS[name])
+    model = SuctionTest(Skin.two_layer(x1d, x1h), probe=probe, mesh=VARIANTS[name])
     curve = model.run()
     M = curve.deflection_mm
     ok = np.flatnonzero(np.isfinite(M))

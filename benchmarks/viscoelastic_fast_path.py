@@ -31,7 +31,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from skinsuction.model import simulate  # noqa: E402
+from skinsuction.model import Skin, simulate  # noqa: E402
 from skinsuction.viscoelastic import (  # noqa: E402
     Prony,
     fast_history,
@@ -87,15 +87,14 @@ def main():
         label = (f"draw {k}: X1d {x1d:.3f} MPa, X1h/X1d {skin['ratio']:.3f}, g {skin['g'][0]:.2f}/"
                  f"{skin['g'][1]:.2f}, tau {1e3 * skin['tau'][0]:.1f} ms/{skin['tau'][1]:.2f} s")
         start = time.perf_counter()
-        elastic = simulate(x1d, x1h, pressures_mbar=np.arange(0.0, PEAK_MBAR + 1, 5.0), mesh=mesh)
+        elastic = simulate(Skin.two_layer(x1d, x1h), pressures_mbar=np.arange(0.0, PEAK_MBAR + 1, 5.0), mesh=mesh)
         t_el = time.perf_counter() - start
         if not elastic.converged:
             print(f"{label}: long-time elastic curve stops at {elastic.last_converged_mbar:g} mbar; skipped")
             continue
         print(label, flush=True)
         for name, hist in histories.items():
-            fe = simulate_history(x1d, x1h, prony, hist.times_s, hist.pressure_mbar, mesh=mesh,
-                                  branches=args.branches)
+            fe = simulate_history(Skin.two_layer(x1d, x1h, spectrum=prony), hist.times_s, hist.pressure_mbar, mesh=mesh, branches=args.branches)
             if not fe.converged:
                 print(f"  {name}: FE stopped: {fe.reason}")
                 continue
@@ -120,7 +119,7 @@ def main():
                 t = hist.times_s
                 t2 = np.sort(np.concatenate([t, 0.5 * (t[1:] + t[:-1])]))
                 p2 = np.interp(t2, t, hist.pressure_mbar)
-                fine = simulate_history(x1d, x1h, prony, t2, p2, mesh=mesh, branches=args.branches)
+                fine = simulate_history(Skin.two_layer(x1d, x1h, spectrum=prony), t2, p2, mesh=mesh, branches=args.branches)
                 d = np.abs(fine.deflection_mm[::2] - fe.deflection_mm) * 1e3
                 print(f"  FE time-step error (steps halved): max {d.max():.3f} µm "
                       f"({100 * d.max() / (1e3 * scale):.3f} % of Uf)")

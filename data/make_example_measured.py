@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from skinsuction.model import simulate
+from skinsuction.model import Skin, simulate
 from skinsuction.provenance import git_info
 
 X1D, X1H = 0.04, 5.0e-4  # MPa
@@ -46,8 +46,7 @@ def make(out, probes, t_d, t_h, given):
     rng = np.random.default_rng(SEED)
     rows = []
     for probe in probes:
-        c = simulate(X1D, X1H, probe_mm=probe, bottom="fixed", pressures_mbar=PRESSURES,
-                     t_d=t_d, t_h=t_h, mesh={"refinement": 1.0})
+        c = simulate(Skin.two_layer(X1D, X1H, t_d=t_d, t_h=t_h, bottom="fixed"), probe=probe, pressures_mbar=PRESSURES, mesh={"refinement": 1.0})
         if not c.converged:
             raise SystemExit(f"{probe:g} mm: the model did not converge ({c.reason})")
         m = c.deflection_mm + rng.normal(0.0, NOISE_SD_MM, PRESSURES.size)

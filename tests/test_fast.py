@@ -11,7 +11,7 @@ import felupe as fem
 import numpy as np
 import pytest
 
-from skinsuction.model import ParameterError, SuctionTest, simulate
+from skinsuction.model import ParameterError, Skin, SuctionTest, simulate
 from skinsuction.model._fast import FastAssembly
 
 COARSE = {"refinement": 0.5}
@@ -28,14 +28,23 @@ CASES = [
     pytest.param(*X2, 1.0, False, 6, "axial", id="X2-6mm-axial"),
     pytest.param(*X2, 1.0, True, 2, "free", id="X2-wall-2mm-free"),
     pytest.param(0.0, 0.0, 1.1, False, 6, "free", id="neo-Hooke-prestretch-6mm-free"),
+    # three layers: a soft superficial layer with its own X2 and pre-stretch
+    pytest.param(*X2, 1.05, True, 2, "fixed", id="three-layers-X2-prestretch-wall-2mm-fixed"),
 ]
 
 
-def twins(mesh, **parameters):
+def skin_of(case_id, x2d, x2h, prestretch, bottom):
+    skin = Skin.two_layer(0.01, 1e-4, x2d=x2d, x2h=x2h, bottom=bottom, prestretch=prestretch)
+    if case_id.startswith("three-layers"):
+        skin = skin.with_layer_on_top("superficial", 0.3, 0.003, X2=0.02, prestretch=1.02)
+    return skin
+
+
+def twins(mesh, skin, probe):
     """The same model twice, by FElupe's engine and by the fast one (same mesh,
     same DOF numbering)."""
-    reference = SuctionTest(**parameters, mesh={**mesh, "engine": "felupe"})
-    fast = SuctionTest(**parameters, mesh={**mesh, "engine": "fast"})
+    reference = SuctionTest(skin, probe, mesh={**mesh, "engine": "felupe"})
+    fast = SuctionTest(skin, probe, mesh={**mesh, "engine": "fast"})
     assert (reference.engine, fast.engine) == ("felupe", "fast")
     np.testing.assert_array_equal(reference.mesh.points, fast.mesh.points)
     np.testing.assert_array_equal(reference.dof1, fast.dof1)
@@ -76,7 +85,7 @@ def relative_difference(ours, reference):
 @pytest.mark.parametrize("quadrature", ["reduced", "full"])
 @pytest.mark.parametrize("element", ["quad8", "quad9"])
 def test_fast_residual_and_tangent_are_felupes(
-    element, quadrature, x2d, x2h, prestretch, probe_wall, probe_mm, bottom
+    element, quadrature, x2d, x2h, prestretch, probe_wall, probe_mm, bottom, request
 ):
     """At a displaced state under suction (the wall contact active where it is
     on), the fast residual equals FElupe's on every DOF and the fast tangent
@@ -86,8 +95,8 @@ def test_fast_residual_and_tangent_are_felupes(
     its own as well, to 1e-10 of itself."""
     reference, model = twins(
         {**COARSE, "element": element, "quadrature": quadrature, "probe_wall": probe_wall},
-        x1d=0.01, x1h=1e-4, x2d=x2d, x2h=x2h, probe_mm=probe_mm, bottom=bottom,
-        prestretch=prestretch,
+        skin_of(request.node.callspec.id.split("-", 2)[-1], x2d, x2h, prestretch, bottom),
+        probe_mm,
     )
     u = turned_onto_the_wall(reference)
     for m in (reference, model):
@@ -131,8 +140,8 @@ def test_fast_curve_is_felupes():
     increments) is the same from either engine to 1e-8, and the curve says which
     engine ran. (A failed trial increment may take a different number of
     iterations: a diverging Newton iteration amplifies round-off.)"""
-    kwargs = dict(x1d=0.01, x1h=1e-4, probe_mm=6, pressures_mbar=np.arange(0.0, 61.0, 10.0),
-                  mesh=COARSE)
+    kwargs = dict(skin=Skin.two_layer(0.01, 1e-4), probe=6,
+                  pressures_mbar=np.arange(0.0, 61.0, 10.0), mesh=COARSE)
     fast = simulate(**kwargs, engine="fast")
     reference = simulate(**kwargs, engine="felupe")
     assert fast.converged and reference.converged
@@ -147,7 +156,7 @@ def test_auto_engine_takes_the_fast_path_where_it_applies():
     displacement formulation with a sharp probe edge, and with FElupe's for a
     rounded edge or the mixed formulation; asking for the fast engine where it
     does not apply is an error that names the engine."""
-    params = dict(x1d=0.01, x1h=1e-4, probe_mm=2)
+    params = dict(skin=Skin.two_layer(0.01, 1e-4), probe=2)
     default = SuctionTest(**params, mesh=COARSE)
     assert default.engine == "fast" and isinstance(default.fast, FastAssembly)
     rounded = {**COARSE, "corner": "grid", "edge_radius": 0.05}

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from skinsuction.measured import MeasuredDataError, geometry_of, load_measured, load_table
-from skinsuction.model import simulate
+from skinsuction.model import Skin, simulate
 from skinsuction.space import (
     BASELINE,
     Geometry,
@@ -295,8 +295,7 @@ def test_rays_on_demand_are_the_fe_model_at_that_probe_and_layers(solver):
     assert rays.shape == (2, 1, len(SPEC.pressures_mbar)) and info["rays"] == 2
     p = np.asarray(SPEC.pressures_mbar)
     for i, r in enumerate(SPEC.ratio_nodes):
-        c = simulate(0.01, 0.01 * r, t_d=1.5, t_h=3.0, probe_mm=4.0, pressures_mbar=p,
-                     mesh={"refinement": 0.5})
+        c = simulate(Skin.two_layer(0.01, 0.01 * r, t_d=1.5, t_h=3.0), probe=4.0, pressures_mbar=p, mesh={"refinement": 0.5})
         m = np.asarray(c.deflection_mm)
         # solved for 2 mm at half the thicknesses and scaled by 2: geometric similarity
         assert np.allclose(rays[i, 0, :m.size], m, rtol=1e-9, atol=1e-12)
@@ -312,14 +311,12 @@ def test_a_causes_rays_on_demand_are_the_fe_model_at_its_nodes_and_those_layers(
     assert rays.shape == (2, 2, p.size) and info["rays"] == 4
     neutral, _ = solver.rays(4.0, 1.5, 3.0)
     assert np.array_equal(rays[:, :1], neutral)  # the neutral node is the neo-Hookean ray
-    c = simulate(0.01, 0.01 * SPEC.ratio_nodes[1], t_d=1.5, t_h=3.0, prestretch=1.1,
-                 probe_mm=4.0, pressures_mbar=p, mesh={"refinement": 0.5})
+    c = simulate(Skin.two_layer(0.01, 0.01 * SPEC.ratio_nodes[1], t_d=1.5, t_h=3.0, prestretch=1.1), probe=4.0, pressures_mbar=p, mesh={"refinement": 0.5})
     m = np.asarray(c.deflection_mm)
     assert np.allclose(rays[1, 1, :m.size], m, rtol=1e-9, atol=1e-12)
     # a thickness cause replaces that layer, scaled with the aperture like the others
     rays, _ = solver.rays(4.0, 1.5, 3.0, thick)
-    c = simulate(0.01, 0.01 * SPEC.ratio_nodes[0], t_d=1.5, t_h=2.4, probe_mm=4.0,
-                 pressures_mbar=p, mesh={"refinement": 0.5})
+    c = simulate(Skin.two_layer(0.01, 0.01 * SPEC.ratio_nodes[0], t_d=1.5, t_h=2.4), probe=4.0, pressures_mbar=p, mesh={"refinement": 0.5})
     m = np.asarray(c.deflection_mm)
     assert np.allclose(rays[0, 1, :m.size], m, rtol=1e-9, atol=1e-12)
 
@@ -346,8 +343,7 @@ def test_a_window_of_nodes_is_solved_alone_and_the_rest_joins_its_cache_later(tm
         == ["1", "1"]
     assert len(list(Path(info["cache"]).parent.glob("*.parquet"))) == 1
     p = np.asarray(SPEC.pressures_mbar)
-    c = simulate(0.01, 0.01 * SPEC.ratio_nodes[0], t_d=1.3, t_h=2.0, probe_mm=4.0,
-                 pressures_mbar=p, mesh={"refinement": 0.5})
+    c = simulate(Skin.two_layer(0.01, 0.01 * SPEC.ratio_nodes[0], t_d=1.3, t_h=2.0), probe=4.0, pressures_mbar=p, mesh={"refinement": 0.5})
     m = np.asarray(c.deflection_mm)
     assert np.allclose(whole[0, 0, :m.size], m, rtol=1e-9, atol=1e-12)
     solver.rays(4.0, 1.3, 2.0, ratio_nodes=(0.02,))  # in the cache now: nothing solved

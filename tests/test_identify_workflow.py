@@ -131,7 +131,8 @@ def test_timing_table_has_the_paper_numbers(setup):
 
 
 def fake_fe(calls):
-    def simulate(x1d, x1h, probe_mm, bottom, pressures_mbar, mesh):
+    def simulate(skin, probe, pressures_mbar, mesh):
+        x1d, x1h, probe_mm = skin.get("dermis.X1"), skin.get("hypodermis.X1"), probe
         calls.append((x1d, x1h))
         return surrogate_curve(x1d, x1h, probe_mm=probe_mm, pressures_mbar=pressures_mbar)
     return simulate

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 from skinsuction.model import (
-    MeshSettings, SkinLayers, SuctionTest, bulk_modulus, simulate, suction_mesh,
+    MeshSettings, Skin, SkinLayers, SuctionTest, bulk_modulus, simulate, suction_mesh,
 )
 
-REFERENCE = dict(x1d=0.08, x1h=4.1e-4)
+REFERENCE = Skin.two_layer(0.08, 4.1e-4)
 
 
 def random_deformation(ncells=5, scale=0.2, seed=0):
@@ -48,7 +48,7 @@ def test_poisson_ratio_of_the_penalty():
 def test_small_strain_limit_is_the_half_space_aspiration_result():
     """Theret et al. (1988): M = 3 a p Phi / (2 pi E), Phi = 2.0 ... 2.1."""
     a, x1, p_mbar = 1.0, 1.0, 1.0
-    curve = simulate(x1, x1, t_d=5.0, t_h=5.0, probe_mm=2 * a, pressures_mbar=[0, p_mbar])
+    curve = simulate(Skin.two_layer(x1, x1, t_d=5.0, t_h=5.0), probe=2 * a, pressures_mbar=[0, p_mbar])
     young = 2 * (2 * x1) * (1 + 0.49)
     phi = curve.deflection_mm[-1] * 2 * np.pi * young / (3 * a * p_mbar * 1e-4)
     assert 2.0 <= phi <= 2.1
@@ -59,7 +59,7 @@ def test_mesh_convergence_differences_shrink():
     at an observed order above 1/2 (about 1: the glued aperture edge is singular)."""
     pressures = np.linspace(0, 100, 11)
     M = [
-        simulate(**REFERENCE, probe_mm=6, pressures_mbar=pressures,
+        simulate(REFERENCE, 6, pressures_mbar=pressures,
                  mesh={"edge_size": 0.024, "refinement": k}).deflection_mm[-1]
         for k in (1, 2, 3)
     ]
@@ -74,14 +74,12 @@ def test_scaling_law_of_the_moduli_and_the_pressure():
     """W is homogeneous of degree one in (X1, X2) and K scales with X1, so scaling
     all moduli and the pressure by s leaves the deformation unchanged."""
     s = 3.0
-    params = dict(x1d=0.02, x1h=5e-4, x2d=0.01, x2h=1e-4, probe_mm=6,
-                  mesh={"refinement": 0.5, "edge_size": 0.02})
+    moduli = dict(x1d=0.02, x1h=5e-4, x2d=0.01, x2h=1e-4)
+    mesh = {"refinement": 0.5, "edge_size": 0.02}
     pressures = np.array([0.0, 20.0, 40.0])
-    base = simulate(**params, pressures_mbar=pressures)
-    scaled = simulate(
-        **{**params, **{k: s * params[k] for k in ("x1d", "x1h", "x2d", "x2h")}},
-        pressures_mbar=s * pressures,
-    )
+    base = simulate(Skin.two_layer(**moduli), 6, pressures_mbar=pressures, mesh=mesh)
+    scaled = simulate(Skin.two_layer(**{k: s * v for k, v in moduli.items()}), 6,
+                      pressures_mbar=s * pressures, mesh=mesh)
     assert base.converged and scaled.converged
     np.testing.assert_allclose(scaled.deflection_mm, base.deflection_mm, rtol=1e-10, atol=1e-14)
 
@@ -92,12 +90,12 @@ def test_geometric_similarity(length_scale):
     the aperture, and the stresses depend on the strains only: scaling the aperture
     and both thicknesses by s scales M by s at the same moduli and pressures. So the
     aperture is not an axis of its own: (t_d/a, t_h/a) serves every probe."""
-    params = dict(x1d=0.02, x1h=4e-4, x2d=0.01, t_d=1.2, t_h=3.0, probe_mm=6.0)
     pressures = [0.0, 20.0, 40.0, 60.0]
     mesh = {"refinement": 0.5}
-    base = simulate(**params, pressures_mbar=pressures, mesh=mesh)
+    base = simulate(Skin.two_layer(0.02, 4e-4, x2d=0.01, t_d=1.2, t_h=3.0), 6.0,
+                    pressures_mbar=pressures, mesh=mesh)
     s = length_scale
-    scaled = simulate(**{**params, **{k: s * params[k] for k in ("t_d", "t_h", "probe_mm")}},
+    scaled = simulate(Skin.two_layer(0.02, 4e-4, x2d=0.01, t_d=s * 1.2, t_h=s * 3.0), s * 6.0,
                       pressures_mbar=pressures, mesh=mesh)
     assert base.converged and scaled.converged and scaled.dofs == base.dofs
     np.testing.assert_allclose(scaled.deflection_mm, s * base.deflection_mm, rtol=1e-10,
@@ -106,8 +104,8 @@ def test_geometric_similarity(length_scale):
 
 def test_reference_deflections():
     """Independent estimate for X1d = 0.08, X1h = 4.1e-4 MPa, fixed bottom."""
-    six = simulate(**REFERENCE, probe_mm=6, pressures_mbar=np.linspace(0, 100, 11))
-    two = simulate(**REFERENCE, probe_mm=2, pressures_mbar=np.linspace(0, 100, 11))
+    six = simulate(REFERENCE, 6, pressures_mbar=np.linspace(0, 100, 11))
+    two = simulate(REFERENCE, 2, pressures_mbar=np.linspace(0, 100, 11))
     assert six.deflection_mm[-1] == pytest.approx(0.36, rel=0.01)
     assert two.deflection_mm[-1] == pytest.approx(0.030, rel=0.01)
 
@@ -122,14 +120,14 @@ def test_mesh_tiles_the_skin_disc_without_gaps_or_overlaps(probe_mm, t_d, settin
     # edges used by one cell only add up to its perimeter: no hanging node at the
     # seam between the fan and the grid, no collapsed cell with a free edge
     settings = MeshSettings.from_dict(settings)
-    mesh, is_dermis = suction_mesh(probe_mm, t_d, 1.0, settings)
+    mesh, layer = suction_mesh(probe_mm, [t_d, 1.0], settings)
     width, depth = settings.outer_radius_factor * (probe_mm / 2 + t_d + 1.0), t_d + 1.0
     Region = (fem.RegionBiQuadraticQuad if settings.element == "quad9"
               else fem.RegionQuadraticQuad)
     region = Region(mesh, quadrature=fem.GaussLegendre(order=2, dim=2))
     assert np.all(region.dV > 0)
     np.testing.assert_allclose(region.dV.sum(), width * depth, rtol=1e-10)
-    np.testing.assert_allclose(region.dV[:, is_dermis].sum(), width * t_d, rtol=1e-10)
+    np.testing.assert_allclose(region.dV[:, layer == 0].sum(), width * t_d, rtol=1e-10)
     corners = mesh.cells[:, :4]
     edges = np.sort(np.stack([corners, np.roll(corners, -1, axis=1)], axis=-1), axis=-1)
     edges = edges.reshape(-1, 2)
@@ -147,9 +145,9 @@ def test_fan_lets_a_soft_dermis_turn_onto_the_probe_wall():
     # to above 90 mbar (to 100 mbar with the solver of before 25 November 2026,
     # which stepped from 94 to 96 mbar where Newton's method, full or with the
     # 94 mbar tangent held, now diverges: docs/model.md, robustness)
-    soft = dict(x1d=0.001, x1h=2.01e-3, probe_mm=6)
-    grid = simulate(**soft, mesh={"corner": "grid", "edge_size": 0.006})
-    fan = simulate(**soft)
+    soft = Skin.two_layer(0.001, 2.01e-3)
+    grid = simulate(soft, 6, mesh={"corner": "grid", "edge_size": 0.006})
+    fan = simulate(soft, 6)
     assert not grid.converged and grid.last_converged_mbar <= 60
     assert fan.last_converged_mbar >= 90
     # where both converged they agree to the discretisation error
@@ -159,16 +157,16 @@ def test_fan_lets_a_soft_dermis_turn_onto_the_probe_wall():
 
 def test_outer_radius_is_far_enough():
     pressures = np.linspace(0, 100, 6)
-    near = simulate(**REFERENCE, probe_mm=6, pressures_mbar=pressures)
-    far = simulate(**REFERENCE, probe_mm=6, pressures_mbar=pressures,
+    near = simulate(REFERENCE, 6, pressures_mbar=pressures)
+    far = simulate(REFERENCE, 6, pressures_mbar=pressures,
                    mesh={"outer_radius_factor": 4.5})
     assert abs(far.deflection_mm[-1] / near.deflection_mm[-1] - 1) < 5e-4
 
 
 def test_probe_wall_changes_nothing_where_the_skin_stays_inside():
     pressures = np.linspace(0, 100, 6)
-    wall = simulate(**REFERENCE, probe_mm=2, pressures_mbar=pressures, mesh={"edge_size": 0.02})
-    plain = simulate(**REFERENCE, probe_mm=2, pressures_mbar=pressures,
+    wall = simulate(REFERENCE, 2, pressures_mbar=pressures, mesh={"edge_size": 0.02})
+    plain = simulate(REFERENCE, 2, pressures_mbar=pressures,
                      mesh={"edge_size": 0.02, "probe_wall": False})
     np.testing.assert_allclose(wall.deflection_mm, plain.deflection_mm, rtol=1e-9)
 
@@ -177,9 +175,9 @@ def test_rounded_probe_edge_tends_to_the_sharp_edge():
     # M is smooth in the edge radius R: its linear extrapolation from two small radii
     # back to R = 0 lands on the sharp-edge model, which has no contact there at all
     coarse = {"corner": "grid", "edge_size": 0.01}
-    sharp = simulate(**REFERENCE, probe_mm=2, mesh=coarse)
+    sharp = simulate(REFERENCE, 2, mesh=coarse)
     M = [
-        simulate(**REFERENCE, probe_mm=2, mesh={**coarse, "edge_radius": R}).deflection_mm[-1]
+        simulate(REFERENCE, 2, mesh={**coarse, "edge_radius": R}).deflection_mm[-1]
         for R in (0.02, 0.04)
     ]
     extrapolated = 2 * M[0] - M[1]
@@ -189,7 +187,7 @@ def test_rounded_probe_edge_tends_to_the_sharp_edge():
 
 def test_skin_stays_outside_the_rounded_probe():
     a, R = 1.0, 0.1
-    model = SuctionTest(0.01, 1e-3, probe_mm=2 * a, mesh={"corner": "grid", "edge_size": 0.01, "edge_radius": R})
+    model = SuctionTest(Skin.two_layer(0.01, 1e-3), probe=2 * a, mesh={"corner": "grid", "edge_size": 0.01, "edge_radius": R})
     curve = model.run(pressures_mbar=np.linspace(0, 30, 16))
     assert curve.converged
     edge = model.items[-1]
@@ -204,15 +202,14 @@ def test_skin_stays_outside_the_rounded_probe():
 def test_softer_bottom_conditions_deflect_more():
     coarse = {"refinement": 0.5, "edge_size": 0.02}
     M = {
-        bottom: simulate(0.08, 1e-3, probe_mm=6, bottom=bottom,
-                         pressures_mbar=[0, 50, 100], mesh=coarse).deflection_mm[-1]
+        bottom: simulate(Skin.two_layer(0.08, 1e-3, bottom=bottom), probe=6, pressures_mbar=[0, 50, 100], mesh=coarse).deflection_mm[-1]
         for bottom in ("fixed", "axial", "free")
     }
     assert M["fixed"] < M["axial"] < M["free"]
 
 
 def test_a_run_that_cannot_finish_returns_its_partial_curve():
-    model = SuctionTest(**REFERENCE, probe_mm=6, mesh={"refinement": 0.5, "edge_size": 0.02})
+    model = SuctionTest(REFERENCE, 6, mesh={"refinement": 0.5, "edge_size": 0.02})
     curve = model.run(pressures_mbar=[0, 10, 20, 30], maxiter=1, iteration_budget=3)
     assert not curve.converged
     assert curve.reason.startswith("no equilibrium above")
@@ -228,7 +225,7 @@ def test_an_output_pressure_just_after_another_costs_one_increment(monkeypatch):
     calls = []
     residual = SuctionTest._residual
     monkeypatch.setattr(SuctionTest, "_residual", lambda self: calls.append(1) or residual(self))
-    coarse = dict(**REFERENCE, probe_mm=6, mesh={"refinement": 0.5})
+    coarse = dict(skin=REFERENCE, probe=6, mesh={"refinement": 0.5})
     even = [0.0, 10.0, 20.0, 30.0, 40.0]
     sliver = [0.0, 10.0, 10.001, 20.0, 30.0, 40.0]
     counts, curves = [], []
@@ -249,7 +246,7 @@ def test_tangents_factorised_in_the_kept_order_give_the_same_curve(monkeypatch):
     # the pattern changes (here once: the tangent at rest lacks a few entries)
     from skinsuction.model import _simulate
 
-    coarse = dict(x1d=0.01, x1h=1e-3, probe_mm=6, mesh={"refinement": 0.5})
+    coarse = dict(skin=Skin.two_layer(0.01, 1e-3), probe=6, mesh={"refinement": 0.5})
     pressures = np.linspace(0.0, 100.0, 11)
     kept = SuctionTest(**coarse).run(pressures)
     orderings = []
@@ -269,16 +266,18 @@ def test_tangents_factorised_in_the_kept_order_give_the_same_curve(monkeypatch):
 
 def test_the_model_reports_each_pressure_it_reaches():
     seen = []
-    simulate(**REFERENCE, probe_mm=6, pressures_mbar=[0, 50, 100], mesh={"refinement": 0.5},
+    simulate(REFERENCE, 6, pressures_mbar=[0, 50, 100], mesh={"refinement": 0.5},
              progress=lambda k, n, p: seen.append((k, n, p)))
     assert seen == [(1, 2, 50.0), (2, 2, 100.0)]
 
 
 def test_invalid_input_names_the_parameter():
-    with pytest.raises(ValueError, match="x1d"):
-        simulate(-0.01, 1e-4)
+    with pytest.raises(ValueError, match=r"dermis\.X1 = -0\.01"):
+        simulate(Skin.two_layer(-0.01, 1e-4))
+    with pytest.raises(ValueError, match=r"hypodermis\.thickness = 0 "):
+        simulate(Skin.two_layer(0.01, 1e-4, t_h=0))
     with pytest.raises(ValueError, match="bottom"):
-        simulate(0.01, 1e-4, bottom="glued")
+        simulate(Skin.two_layer(0.01, 1e-4, bottom="glued"))
     with pytest.raises(ValueError, match="smoothing"):
         MeshSettings.from_dict({"smoothing": 1})
 
@@ -293,7 +292,7 @@ def test_prestress_tends_to_the_incompressible_membrane_result():
 
 
 def test_prestretched_skin_is_in_equilibrium_before_suction():
-    model = SuctionTest(**REFERENCE, probe_mm=6, prestretch=1.05,
+    model = SuctionTest(Skin.two_layer(0.08, 4.1e-4, prestretch=1.05), 6,
                         mesh={"refinement": 0.5, "edge_size": 0.02})
     f = model._residual()
     assert np.linalg.norm(f[model.dof0]) > 0.1  # the outer ring holds the tension
@@ -303,8 +302,8 @@ def test_prestretched_skin_is_in_equilibrium_before_suction():
 def test_pre_tension_stiffens_the_response():
     pressures = [0, 50, 100]
     coarse = {"refinement": 0.5, "edge_size": 0.02}
-    M = [simulate(**REFERENCE, probe_mm=6, pressures_mbar=pressures, mesh=coarse,
-                  prestretch=lam).deflection_mm[-1] for lam in (1.0, 1.01, 1.03)]
+    M = [simulate(Skin.two_layer(0.08, 4.1e-4, prestretch=lam), 6, pressures_mbar=pressures,
+                  mesh=coarse).deflection_mm[-1] for lam in (1.0, 1.01, 1.03)]
     assert M[0] > M[1] > M[2]
 
 

@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skinsuction.model import ParameterError
+from skinsuction.model import ParameterError, Skin
 from skinsuction import provenance, space
 from skinsuction.space import COLUMNS, SimulatedSpace, assemble_space, compute_point, expand_axis, grid_points, parse_point_id, point_id, read_curve, read_space, round_sig, write_curve
 from skinsuction._files import atomic_output
@@ -312,15 +312,22 @@ def test_atomic_output_on_success_and_error(tmp_path):
 
 
 # ------------------------------------------------------------ the FE job adapter
+def stand_in_params(skin, probe_mm):
+    """A stand-in model's view of the skin it is given: the flat two-layer values."""
+    v = skin.two_layer_values()
+    return dict(probe_mm=probe_mm, bottom=skin.bottom,
+                **{k: v[k] for k in ("x1d", "x1h", "x2d", "x2h", "t_d", "t_h")})
+
+
 @pytest.fixture
 def stand_in_model(monkeypatch):
     """Replace skinsuction.model by a stand-in module for the duration of a test."""
     Curve = StandInCurve
     calls = []
 
-    def simulate(x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, probe_mm=6.0, bottom="fixed",
-                 pressures_mbar=None, mesh=None):
-        params = dict(probe_mm=probe_mm, bottom=bottom, x1d=x1d, x1h=x1h, x2d=x2d, x2h=x2h, t_d=t_d, t_h=t_h)
+    def simulate(skin, probe=6.0, pressures_mbar=None, mesh=None):
+        params = stand_in_params(skin, probe)
+        x1h = params["x1h"]
         calls.append((params, mesh))
         if x1h > 0.05:
             raise RuntimeError("mesh generator crashed")
@@ -329,6 +336,7 @@ def stand_in_model(monkeypatch):
 
     fake = types.ModuleType("skinsuction.model")
     fake.Curve, fake.simulate, fake.ParameterError = Curve, simulate, ParameterError
+    fake.Skin = Skin
     monkeypatch.setitem(sys.modules, "skinsuction.model", fake)
     return calls
 
@@ -359,16 +367,15 @@ def stopping_model(monkeypatch):
     calls = []
     stops = {"quad8": 40.0, "quad9": None, "soft wall": None}
 
-    def simulate(x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, probe_mm=6.0, bottom="fixed",
-                 pressures_mbar=None, mesh=None, iteration_budget=None):
-        params = dict(probe_mm=probe_mm, bottom=bottom, x1d=x1d, x1h=x1h, x2d=x2d, x2h=x2h,
-                      t_d=t_d, t_h=t_h)
+    def simulate(skin, probe=6.0, pressures_mbar=None, mesh=None, iteration_budget=None):
+        params = stand_in_params(skin, probe)
         calls.append((mesh, iteration_budget))
         key = "soft wall" if "wall_penalty" in mesh else mesh.get("element", "quad8")
         return stand_in_curve(params, pressures_mbar, stops[key])
 
     fake = types.ModuleType("skinsuction.model")
     fake.Curve, fake.simulate, fake.ParameterError = StandInCurve, simulate, ParameterError
+    fake.Skin = Skin
     monkeypatch.setitem(sys.modules, "skinsuction.model", fake)
     return calls, stops
 
@@ -431,9 +438,8 @@ def test_no_fallback_solve_where_the_first_converges(tmp_path, stopping_model):
 def test_splice_keeps_the_first_solve_and_joins_the_fallback_continuously(monkeypatch):
     from skinsuction.space import solve_with_fallbacks
 
-    def simulate(x1d, x1h, probe_mm=6.0, bottom="fixed", pressures_mbar=None, mesh=None,
-                 iteration_budget=None, **kw):
-        params = dict(probe_mm=probe_mm, x1d=x1d, x1h=x1h)
+    def simulate(skin, probe=6.0, pressures_mbar=None, mesh=None, iteration_budget=None, **kw):
+        params = {k: stand_in_params(skin, probe)[k] for k in ("probe_mm", "x1d", "x1h")}
         if mesh.get("element") == "quad9":  # a stiffer (locking) element that converges
             c = stand_in_curve(params, pressures_mbar)
             return dataclasses.replace(c, deflection_mm=0.99 * c.deflection_mm)
@@ -441,6 +447,7 @@ def test_splice_keeps_the_first_solve_and_joins_the_fallback_continuously(monkey
 
     fake = types.ModuleType("skinsuction.model")
     fake.Curve, fake.simulate, fake.ParameterError = StandInCurve, simulate, ParameterError
+    fake.Skin = Skin
     monkeypatch.setitem(sys.modules, "skinsuction.model", fake)
     p = np.asarray(PRESSURES)
     params = dict(x1d=0.01, x1h=1e-4, probe_mm=6.0)

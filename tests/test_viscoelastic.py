@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from skinsuction.model import ParameterError, SuctionTest, bulk_modulus, simulate
+from skinsuction.model import ParameterError, Skin, SuctionTest, bulk_modulus, simulate
 from skinsuction.viscoelastic import (
     Prony,
     ViscoelasticSuctionTest,
@@ -33,13 +33,13 @@ P = np.arange(0.0, 81.0, 4.0)
 
 @pytest.fixture(scope="module")
 def long_time():
-    return simulate(X1D, X1H, pressures_mbar=P, mesh=COARSE)
+    return simulate(Skin.two_layer(X1D, X1H), pressures_mbar=P, mesh=COARSE)
 
 
 @pytest.fixture(scope="module")
 def instantaneous():
     f = SPECTRUM.instantaneous_factor
-    return simulate(X1D * f, X1H * f, pressures_mbar=P, mesh=COARSE)
+    return simulate(Skin.two_layer(X1D * f, X1H * f), pressures_mbar=P, mesh=COARSE)
 
 
 def rel_error(a, b):
@@ -104,7 +104,7 @@ def test_g_zero_is_the_elastic_model(long_time):
     # a: up and back down at g = 0 follows the elastic curve both ways
     times = np.arange(2 * len(P) - 1) * 0.01
     pressures = np.concatenate([P, P[-2::-1]])
-    h = simulate_history(X1D, X1H, Prony.elastic(), times, pressures, mesh=COARSE)
+    h = simulate_history(Skin.two_layer(X1D, X1H, spectrum=Prony.elastic()), times, pressures, mesh=COARSE)
     assert h.converged
     up, down = h.deflection_mm[: len(P)], h.deflection_mm[len(P) - 1:][::-1]
     assert rel_error(up, long_time.deflection_mm) < 1e-6
@@ -115,7 +115,7 @@ def test_slow_load_gives_the_long_time_response(long_time):
     # b: a ramp over T >> tau; the error is the viscous over-stress, O(tau_max / T)
     errors = []
     for T in (1e3, 1e4):
-        h = simulate_history(X1D, X1H, SPECTRUM, P / P[-1] * T, P, mesh=COARSE)
+        h = simulate_history(Skin.two_layer(X1D, X1H, spectrum=SPECTRUM), P / P[-1] * T, P, mesh=COARSE)
         errors.append(rel_error(h.deflection_mm, long_time.deflection_mm))
     assert errors[1] < 2e-5
     assert 5 < errors[0] / errors[1] < 20  # first order in tau / T: the limit, not luck
@@ -125,7 +125,7 @@ def test_fast_load_gives_the_instantaneous_response(instantaneous, long_time):
     # c: a ramp over T << tau gives the elastic model at X1 (1 + sum g); error O(T / tau_min)
     errors = []
     for T in (1e-4, 1e-5):
-        h = simulate_history(X1D, X1H, SPECTRUM, P / P[-1] * T, P, mesh=COARSE)
+        h = simulate_history(Skin.two_layer(X1D, X1H, spectrum=SPECTRUM), P / P[-1] * T, P, mesh=COARSE)
         errors.append(rel_error(h.deflection_mm, instantaneous.deflection_mm))
     assert errors[1] < 2e-4
     assert 5 < errors[0] / errors[1] < 20
@@ -139,9 +139,8 @@ def test_fast_load_with_isochoric_branches_keeps_the_bulk_modulus():
     f = SPECTRUM.instantaneous_factor
     ratio = 3 * bulk_modulus(1.0) / (2 * 2.0 * f)  # 3K / (2 mu)
     nu = (ratio - 1) / (2 * ratio + 1)
-    reference = SuctionTest(X1D * f, X1H * f, mesh=COARSE, poisson=nu).run(P)
-    h = simulate_history(X1D, X1H, SPECTRUM, P / P[-1] * 1e-5, P, mesh=COARSE,
-                         branches="isochoric")
+    reference = SuctionTest(Skin.two_layer(X1D * f, X1H * f), mesh=COARSE, poisson=nu).run(P)
+    h = simulate_history(Skin.two_layer(X1D, X1H, spectrum=SPECTRUM), P / P[-1] * 1e-5, P, mesh=COARSE, branches="isochoric")
     assert rel_error(h.deflection_mm, reference.deflection_mm) < 2e-4
 
 
@@ -152,7 +151,7 @@ def test_creep_after_a_step_tends_to_the_long_time_value(instantaneous, long_tim
     t = np.concatenate([[0.0], 1e-5 + np.concatenate([[0.0], graded_steps(hold, 1e-4, 1.3, 0.2)])])
     p = np.where(t > 0, P[-1], 0.0)
     p[1] = P[-1]
-    h = simulate_history(X1D, X1H, SPECTRUM, t, p, mesh=COARSE)
+    h = simulate_history(Skin.two_layer(X1D, X1H, spectrum=SPECTRUM), t, p, mesh=COARSE)
     m = h.deflection_mm
     assert h.converged
     assert np.all(np.diff(m[1:]) > -1e-12)  # creep only grows
@@ -166,8 +165,7 @@ def test_second_order_in_the_time_step():
 
     def run(n):
         t = np.arange(3 * n + 1) * (0.1 / n)
-        h = simulate_history(X1D, X1H, spectrum, t, np.minimum(t / 0.1, 1) * 80,
-                             mesh=COARSE, tol=1e-10)
+        h = simulate_history(Skin.two_layer(X1D, X1H, spectrum=spectrum), t, np.minimum(t / 0.1, 1) * 80, mesh=COARSE, tol=1e-10)
         return h.deflection_mm
 
     reference = run(128)
@@ -178,9 +176,8 @@ def test_second_order_in_the_time_step():
 
 def test_tangent_is_the_derivative_of_the_residual():
     # with a history H != 0 (mid-creep) and the suction on: central differences
-    model = ViscoelasticSuctionTest(X1D, X1H, {"dermis": SPECTRUM,
-                                               "hypodermis": Prony([2.0], [0.05])},
-                                    mesh=COARSE)
+    model = ViscoelasticSuctionTest(Skin.two_layer(X1D, X1H, spectrum={"dermis": SPECTRUM,
+                                               "hypodermis": Prony([2.0], [0.05])}), mesh=COARSE)
     h = model.run([0, 0.005, 0.02], [0, 60, 60])
     assert h.converged
     asm, m = model.assembly, model.model
@@ -201,18 +198,14 @@ def test_scaling_and_time_scale_invariance():
     # M(s X1, s p) = M(X1, p) and M(t; tau) = M(k t; k tau), per-layer spectra
     spectra = {"dermis": Prony([0.5], [0.02]), "hypodermis": Prony([1.0, 0.2], [0.1, 1.0])}
     hist = mode1_history(60, on_s=0.3, off_s=0.2, cycles=1, max_step_s=0.05)
-    base = simulate_history(X1D, X1H, spectra, hist.times_s, hist.pressure_mbar, mesh=COARSE,
-                            tol=1e-10)
-    scaled = simulate_history(2 * X1D, 2 * X1H, spectra, hist.times_s, 2 * hist.pressure_mbar,
-                              mesh=COARSE, tol=1e-10)
+    base = simulate_history(Skin.two_layer(X1D, X1H, spectrum=spectra), hist.times_s, hist.pressure_mbar, mesh=COARSE, tol=1e-10)
+    scaled = simulate_history(Skin.two_layer(2 * X1D, 2 * X1H, spectrum=spectra), hist.times_s, 2 * hist.pressure_mbar, mesh=COARSE, tol=1e-10)
     slow = {k: Prony(v.g, 3 * np.array(v.tau_s)) for k, v in spectra.items()}
-    stretched = simulate_history(X1D, X1H, slow, 3 * hist.times_s, hist.pressure_mbar,
-                                 mesh=COARSE, tol=1e-10)
+    stretched = simulate_history(Skin.two_layer(X1D, X1H, spectrum=slow), 3 * hist.times_s, hist.pressure_mbar, mesh=COARSE, tol=1e-10)
     assert rel_error(scaled.deflection_mm, base.deflection_mm) < 1e-8
     assert rel_error(stretched.deflection_mm, base.deflection_mm) < 1e-8
     # the spectra matter: the same history with the dermis's alone differs
-    dermis_only = simulate_history(X1D, X1H, {"dermis": spectra["dermis"]}, hist.times_s,
-                                   hist.pressure_mbar, mesh=COARSE)
+    dermis_only = simulate_history(Skin.two_layer(X1D, X1H, spectrum={"dermis": spectra["dermis"]}), hist.times_s, hist.pressure_mbar, mesh=COARSE)
     assert rel_error(dermis_only.deflection_mm, base.deflection_mm) > 0.05
 
 
@@ -222,9 +215,8 @@ def test_fast_path_is_exact_in_the_linear_limit():
     # and the FE time solve (internal variables) are independent routes to the same
     spectrum = Prony([0.5, 1.0], [0.03, 0.3])
     hist = mode1_history(0.2, on_s=0.5, off_s=0.5, cycles=1, max_step_s=0.02)
-    el = simulate(X1D, X1H, pressures_mbar=np.linspace(0, 0.2, 11), mesh=COARSE)
-    fe = simulate_history(X1D, X1H, spectrum, hist.times_s, hist.pressure_mbar, mesh=COARSE,
-                          tol=1e-10)
+    el = simulate(Skin.two_layer(X1D, X1H), pressures_mbar=np.linspace(0, 0.2, 11), mesh=COARSE)
+    fe = simulate_history(Skin.two_layer(X1D, X1H, spectrum=spectrum), hist.times_s, hist.pressure_mbar, mesh=COARSE, tol=1e-10)
     fast = fast_history(el, spectrum, hist.times_s, hist.pressure_mbar)
     assert rel_error(fast, fe.deflection_mm) < 5e-4
     # while the elastic model alone misses by the creep
@@ -254,6 +246,6 @@ def test_histories():
 
 def test_bad_histories_are_refused():
     with pytest.raises(ParameterError):
-        simulate_history(X1D, X1H, SPECTRUM, [0, 1, 1], [0, 10, 10], mesh=COARSE)
+        simulate_history(Skin.two_layer(X1D, X1H, spectrum=SPECTRUM), [0, 1, 1], [0, 10, 10], mesh=COARSE)
     with pytest.raises(ParameterError):
-        simulate_history(X1D, X1H, SPECTRUM, [0, 1], [5, 10], mesh=COARSE)
+        simulate_history(Skin.two_layer(X1D, X1H, spectrum=SPECTRUM), [0, 1], [5, 10], mesh=COARSE)

@@ -174,8 +174,18 @@ class ParameterError(ValueError):
     pass
 
 
-def simulate(x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, probe_mm=6.0, bottom="fixed",
-             pressures_mbar=None, mesh=None):
+class Skin:  # the stand-in's: the two-layer values as given
+    def __init__(self, **values):
+        self.values = values
+
+    @classmethod
+    def two_layer(cls, x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, bottom="fixed",
+                  prestretch=1.0):
+        return cls(x1d=x1d, x1h=x1h, bottom=bottom)
+
+
+def simulate(skin, probe=6.0, pressures_mbar=None, mesh=None):
+    x1d, x1h, bottom, probe_mm = skin.values["x1d"], skin.values["x1h"], skin.values["bottom"], probe
     p = np.arange(0, 101, 2.0) if pressures_mbar is None else np.asarray(pressures_mbar, float)
     soft = {"fixed": 1.0, "axial": 1.05, "free": 1.3}[bottom]
     m = soft * 0.02 * probe_mm * np.sqrt(p) / (x1d * 40 + x1h * 400) ** 0.3

@@ -1,21 +1,37 @@
-"""The forward model of the suction test (axisymmetric, two layers, finite strain)."""
+"""The forward model of the suction test (axisymmetric, a stack of layers, finite strain).
+
+A skin is described once (:class:`Skin`: its layers, top first, and the bottom
+condition); :class:`Probe` and :class:`Ramp` stand beside it. :func:`simulate`
+solves a skin under a probe for M(p).
+"""
 
 from ._curve import Curve, ParameterError
-from ._geometry import MeshSettings, edge_fan, suction_mesh
+from ._geometry import MeshSettings, edge_fan, layer_breaks, suction_mesh
 from ._material import SkinLayers, bulk_modulus, prestress, thickness_stretch
-from ._simulate import BOTTOM_CONDITIONS, DEFAULT_PRESSURES_MBAR, SuctionTest, simulate
+from ._prony import Prony
+from ._simulate import DEFAULT_PRESSURES_MBAR, SuctionTest, layer_prestretch, simulate
+from ._skin import BOTTOM_CONDITIONS, MAX_LAYERS, Layer, Probe, Ramp, Skin
 
 __all__ = [
     "BOTTOM_CONDITIONS",
     "Curve",
     "DEFAULT_PRESSURES_MBAR",
+    "Layer",
+    "MAX_LAYERS",
     "MeshSettings",
     "ParameterError",
+    "Probe",
+    "Prony",
+    "Ramp",
+    "Skin",
     "SkinLayers",
     "SuctionTest",
     "bulk_modulus",
     "edge_fan",
+    "layer_breaks",
+    "layer_prestretch",
     "prestress",
     "thickness_stretch",
     "simulate",
+    "suction_mesh",
 ]

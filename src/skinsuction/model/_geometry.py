@@ -1,4 +1,4 @@
-"""Graded axisymmetric mesh of the two skin layers under the probe."""
+"""Graded axisymmetric mesh of a stack of skin layers under the probe."""
 
 from dataclasses import asdict, dataclass
 
@@ -45,12 +45,12 @@ class MeshSettings:
         Pure displacement with the volumetric penalty at the Gauss points, or a
         mixed form with cell-wise constant pressure and volume ratio.
     outer_radius_factor : float
-        Outer radius of the model as a multiple of ``a + t_d + t_h``.
+        Outer radius of the model as a multiple of ``a`` plus the stack's depth.
     edge_size : float
         Element size at the aperture edge, as a fraction of ``a``: the radius of the
         fan's innermost ring, or the grid's corner element.
     far_size : float
-        Largest element size, as a fraction of ``a + t_d + t_h``.
+        Largest element size, as a fraction of ``a`` plus the stack's depth.
     growth : float
         Largest ratio of neighbouring element sizes.
     probe_wall : bool
@@ -68,6 +68,11 @@ class MeshSettings:
         and tangent to round-off. The fast path covers the displacement
         formulation with a sharp probe edge; ``"auto"`` takes it there and
         FElupe's for ``formulation="mixed"`` or ``edge_radius > 0``.
+    node_lines_mm : tuple of float
+        Depths (mm below the surface) of extra horizontal node lines, besides the
+        layer interfaces (which always are node lines): a mesh of one stack that
+        another stack's interfaces cut the same way (e.g. to compare a layer split
+        in two identical ones with the whole layer).
     """
 
     refinement: float = 1.0
@@ -85,6 +90,7 @@ class MeshSettings:
     wall_penalty: float = 10.0
     edge_radius: float = 0.0
     engine: str = "auto"
+    node_lines_mm: tuple = ()
 
     @classmethod
     def from_dict(cls, settings=None):
@@ -98,8 +104,18 @@ class MeshSettings:
             )
         return cls(**settings)
 
+    def __post_init__(self):
+        object.__setattr__(self, "node_lines_mm", tuple(float(v) for v in self.node_lines_mm))
+
     def to_dict(self):
-        return asdict(self)
+        """The settings as a dict (``node_lines_mm`` only when set, so the records of
+        meshes without extra lines read as before it existed)."""
+        out = asdict(self)
+        if not out["node_lines_mm"]:
+            del out["node_lines_mm"]
+        else:
+            out["node_lines_mm"] = list(out["node_lines_mm"])
+        return out
 
 
 def graded_coordinates(length, size_start, size_end, growth):
@@ -192,52 +208,109 @@ def edge_fan(a, size, inner, divisions, parts=1):
     return fem.mesh.flip(fan)
 
 
-def suction_mesh(probe_mm, t_d, t_h, settings=MeshSettings()):
-    """Quadratic quadrilateral mesh of the dermis (top) over the hypodermis.
+def layer_breaks(thicknesses, node_lines_mm=()):
+    """Depths (mm, positive, ascending) of every horizontal node line below the
+    surface: the layer interfaces, any extra node line, and the bottom.
+
+    Examples
+    --------
+    >>> layer_breaks([0.1, 0.9, 1.0]).tolist()
+    [0.1, 1.0, 2.0]
+    >>> layer_breaks([1.0, 1.0], node_lines_mm=[0.1]).tolist()
+    [0.1, 1.0, 2.0]
+    """
+    t = np.asarray(thicknesses, dtype=float)
+    if t.ndim != 1 or len(t) < 1 or not np.all(t > 0):
+        raise ParameterError(f"layer thicknesses must be positive, not {list(t)}")
+    depth = np.cumsum(t)
+    lines = [float(v) for v in node_lines_mm]
+    if any(not 0 < v < depth[-1] for v in lines):
+        raise ParameterError(
+            f"node_lines_mm must lie inside the stack (0, {depth[-1]:g}) mm, not {lines}")
+    breaks = np.unique(np.concatenate([depth, lines]))
+    # lines closer than 1e-9 of the depth are one line
+    keep = np.concatenate([np.diff(breaks) > 1e-9 * depth[-1], [True]])
+    breaks = breaks[keep]
+    breaks[-1] = depth[-1]
+    return breaks
+
+
+def _stack_lines(breaks, top, h_top, h_far, growth):
+    """Node depths z (negative, descending) from ``z = -top`` through each segment
+    between ``breaks``: each graded from the spacing its upper neighbour ends with."""
+    z = [-top - graded_coordinates(breaks[0] - top, h_top, h_far, growth)]
+    for upper, lower in zip(breaks[:-1], breaks[1:]):
+        h = abs(z[-1][-1] - z[-1][-2])
+        z.append(-upper - graded_coordinates(lower - upper, h, h_far, growth)[1:])
+    return np.concatenate(z)
+
+
+def suction_mesh(probe_mm, thicknesses, settings=MeshSettings()):
+    """Quadratic quadrilateral mesh of a stack of layers (top first).
 
     FElupe's axisymmetric fields take coordinate 0 as the axis (z, up) and
     coordinate 1 as the radius (r). The skin surface is ``z = 0``; the bottom is
-    ``z = -(t_d + t_h)``.
+    ``z = -sum(thicknesses)``; every layer interface (and every depth of
+    ``settings.node_lines_mm``) is a line of nodes.
+
+    Parameters
+    ----------
+    probe_mm : float
+        Aperture diameter (mm).
+    thicknesses : sequence of float
+        Layer thicknesses (mm), top first.
+    settings : MeshSettings
 
     Returns
     -------
     mesh : felupe.Mesh
         The mesh (``quad8`` or ``quad9`` cells).
-    is_dermis : ndarray of bool
-        Per cell, True in the dermis.
+    layer : ndarray of int
+        Per cell, the index of its layer (0: top).
+
+    Examples
+    --------
+    >>> mesh, layer = suction_mesh(2.0, [0.1, 0.9, 1.0], MeshSettings(refinement=0.5))
+    >>> sorted(set(layer.tolist()))
+    [0, 1, 2]
+    >>> bool(np.any(np.isclose(mesh.points[:, 0], -0.1)))
+    True
     """
     if settings.element not in ("quad8", "quad9"):
         raise ParameterError(f"mesh element must be 'quad8' or 'quad9', not {settings.element!r}")
+    breaks = layer_breaks(thicknesses, settings.node_lines_mm)
     if settings.corner == "fan":
-        mesh = _fan_mesh(probe_mm, t_d, t_h, settings)
+        mesh = _fan_mesh(probe_mm, breaks, settings)
     elif settings.corner == "grid":
-        mesh = _grid_mesh(probe_mm, t_d, t_h, settings)
+        mesh = _grid_mesh(probe_mm, breaks, settings)
     else:
         raise ParameterError(f"mesh corner must be 'fan' or 'grid', not {settings.corner!r}")
     mesh = mesh.add_midpoints_edges()
     if settings.element == "quad9":
         mesh = mesh.add_midpoints_faces()
-    centroid_z = mesh.points[mesh.cells[:, :4], 0].mean(axis=1)
-    return mesh, centroid_z > -t_d
+    depth = -mesh.points[mesh.cells[:, :4], 0].mean(axis=1)
+    interfaces = np.cumsum(np.asarray(thicknesses, dtype=float))[:-1]
+    return mesh, np.searchsorted(interfaces, depth)
 
 
-def _sizes(probe_mm, t_d, t_h, settings):
+def _sizes(probe_mm, depth, settings):
     a = probe_mm / 2
     coarsening = min(settings.refinement, 1.0)
     return dict(
         a=a,
         h_edge=settings.edge_size * a / coarsening,
-        h_far=settings.far_size * (a + t_d + t_h) / coarsening,
-        outer=settings.outer_radius_factor * (a + t_d + t_h),
+        h_far=settings.far_size * (a + depth) / coarsening,
+        outer=settings.outer_radius_factor * (a + depth),
     )
 
 
-def _fan_mesh(probe_mm, t_d, t_h, settings):
+def _fan_mesh(probe_mm, breaks, settings):
     if settings.edge_radius > 0:
         raise ParameterError("a rounded probe edge (edge_radius > 0) needs mesh corner 'grid'")
-    s = _sizes(probe_mm, t_d, t_h, settings)
+    s = _sizes(probe_mm, breaks[-1], settings)
     a, g = s["a"], settings.growth
-    size = min(settings.fan_size * a, 0.5 * t_d)
+    # the fan lies in the top layer (above its first node line)
+    size = min(settings.fan_size * a, 0.5 * breaks[0])
     divisions = max(1, round(settings.fan_divisions * min(settings.refinement, 1.0)))
     h_fan = size / divisions
     inner = min(s["h_edge"], size / (1 + 1 / divisions))
@@ -249,10 +322,8 @@ def _fan_mesh(probe_mm, t_d, t_h, settings):
         a + size * np.linspace(-1.0, 1.0, 2 * divisions + 1)[1:],
         two_sided(a + size, s["outer"], h_fan, s["h_far"], g)[1:],
     ])
-    z_d = -size - graded_coordinates(t_d - size, h_fan, s["h_far"], g)
-    h_interface = abs(z_d[-1] - z_d[-2])
-    z_h = -t_d - graded_coordinates(t_h, h_interface, s["h_far"], g)
-    z = np.sort(np.concatenate([-size * np.linspace(0.0, 1.0, divisions + 1), z_d[1:], z_h[1:]]))
+    z_stack = _stack_lines(breaks, size, h_fan, s["h_far"], g)
+    z = np.sort(np.concatenate([-size * np.linspace(0.0, 1.0, divisions + 1), z_stack[1:]]))
     if parts > 1:
         r, z = subdivide(r, parts), subdivide(z, parts)
     grid = fem.mesh.Grid(z, r)
@@ -271,8 +342,8 @@ def _fan_mesh(probe_mm, t_d, t_h, settings):
     return mesh
 
 
-def _grid_mesh(probe_mm, t_d, t_h, settings):
-    s = _sizes(probe_mm, t_d, t_h, settings)
+def _grid_mesh(probe_mm, breaks, settings):
+    s = _sizes(probe_mm, breaks[-1], settings)
     a, g, h_edge, h_far = s["a"], settings.growth, s["h_edge"], s["h_far"]
 
     # radius: fine at the aperture edge on both sides, coarser at the axis and outside;
@@ -285,11 +356,8 @@ def _grid_mesh(probe_mm, t_d, t_h, settings):
     r_out = two_sided(glued, s["outer"], h_edge, h_far, g)
     r = np.concatenate([r_in, r_edge[1:], r_out[1:]])
 
-    # depth: fine under the surface, a node line on the dermis/hypodermis interface
-    z_d = -graded_coordinates(t_d, h_edge, h_far, g)
-    h_interface = abs(z_d[-1] - z_d[-2])
-    z_h = -t_d - graded_coordinates(t_h, h_interface, h_far, g)
-    z = np.sort(np.concatenate([z_d, z_h[1:]]))
+    # depth: fine under the surface, a node line on every layer interface
+    z = np.sort(_stack_lines(breaks, 0.0, h_edge, h_far, g))
     if settings.refinement > 1:
         r, z = subdivide(r, settings.refinement), subdivide(z, settings.refinement)
     return fem.mesh.Grid(z, r)

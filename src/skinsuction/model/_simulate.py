@@ -11,9 +11,9 @@ from ._fast import _SUPERLU_OPTIONS, FastAssembly, OrderedFactors, surface_edges
 from ._geometry import MeshSettings, suction_mesh
 from ._material import SkinLayers, bulk_modulus, thickness_stretch
 from ._probe import ProbeEdge
+from ._skin import BOTTOM_CONDITIONS, Probe, Ramp, Skin
 
 MBAR_TO_MPA = 1e-4
-BOTTOM_CONDITIONS = ("fixed", "axial", "free")
 DEFAULT_PRESSURES_MBAR = np.arange(0.0, 101.0, 2.0)
 
 
@@ -76,71 +76,101 @@ class NoEquilibrium(RuntimeError):
         self.iterations = iterations
 
 
-class SuctionTest:
-    """The axisymmetric two-layer suction-test model, assembled once and solved for
-    a sequence of pressures.
+def _probe_mm(probe):
+    return (probe if isinstance(probe, Probe) else Probe(probe)).aperture_mm
+
+
+def _mesh_settings(mesh, engine=None):
+    if not isinstance(mesh, MeshSettings):
+        mesh = MeshSettings.from_dict(mesh)
+    if engine is not None:
+        mesh = MeshSettings.from_dict({**mesh.to_dict(), "engine": engine})
+    if mesh.engine not in ("auto", "fast", "felupe"):
+        raise ParameterError(f"engine must be 'auto', 'fast' or 'felupe', not {mesh.engine!r}")
+    if mesh.engine == "fast" and not _fast_applies(mesh):
+        raise ParameterError(
+            "the fast engine assembles the displacement formulation with a sharp "
+            "probe edge only: use engine 'felupe' for formulation 'mixed' or "
+            "edge_radius > 0"
+        )
+    return mesh
+
+
+def _fast_applies(mesh):
+    return mesh.formulation == "displacement" and mesh.edge_radius == 0
+
+
+def layer_prestretch(skin, poisson=0.49):
+    """Per layer, the diagonal ``(axial, radial, hoop)`` of the pre-deformation F0:
+    the in-plane pre-stretch, and the through-thickness stretch that keeps the
+    layer's surface traction-free (each layer contracts by its own law).
 
     Parameters
     ----------
-    x1d, x1h, x2d, x2h : float
-        Material parameters of the dermis (d) and hypodermis (h) in MPa, for
-        ``W = X1 (I1 - 3) + X2 (I1 - 3)^2`` (isochoric I1).
-    t_d, t_h : float
-        Layer thicknesses in mm.
-    probe_mm : float
-        Aperture diameter of the probe in mm.
-    bottom : {"fixed", "axial", "free"}
-        Bottom boundary: both directions restrained, axial only, or none.
+    skin : Skin
+    poisson : float
+
+    Returns
+    -------
+    ndarray, shape (layers, 3)
+
+    Examples
+    --------
+    >>> layer_prestretch(Skin.two_layer(0.08, 4e-4)).tolist()
+    [[1.0, 1.0, 1.0], [1.0, 1.0, 1.0]]
+    """
+    return np.array([
+        [thickness_stretch(layer.prestretch, layer.X1, layer.X2, poisson),
+         layer.prestretch, layer.prestretch]
+        for layer in skin.layers
+    ])
+
+
+class SuctionTest:
+    """The axisymmetric suction-test model of a stack of skin layers, assembled
+    once and solved for a sequence of pressures.
+
+    Parameters
+    ----------
+    skin : Skin
+        The layers (top first: thickness, X1, X2 of ``W = X1 (I1 - 3) + X2 (I1 -
+        3)^2`` with isochoric I1, pre-stretch) and the bottom condition. The
+        layers' spectra are the viscoelastic model's
+        (:class:`skinsuction.viscoelastic.ViscoelasticSuctionTest`); here the
+        long-time moduli act.
+    probe : Probe or float
+        The probe, or its aperture diameter in mm.
     mesh : MeshSettings or dict or None
         Discretisation settings.
     poisson : float
         Small-strain Poisson ratio that sets the volumetric penalty.
+
+    Examples
+    --------
+    >>> model = SuctionTest(Skin.two_layer(0.08, 4.1e-4), 2.0, {"refinement": 0.5})
+    >>> model.layer_names, int(model.layer.max())
+    (('dermis', 'hypodermis'), 1)
     """
 
-    def __init__(
-        self,
-        x1d,
-        x1h,
-        x2d=0.0,
-        x2h=0.0,
-        t_d=1.0,
-        t_h=1.0,
-        probe_mm=6.0,
-        bottom="fixed",
-        mesh=None,
-        poisson=0.49,
-        prestretch=1.0,
-    ):
-        if bottom not in BOTTOM_CONDITIONS:
-            raise ParameterError(f"bottom must be one of {BOTTOM_CONDITIONS}, not {bottom!r}")
-        for name, value in dict(x1d=x1d, x1h=x1h, t_d=t_d, t_h=t_h, probe_mm=probe_mm).items():
-            if not value > 0:
-                raise ParameterError(f"{name} must be positive, not {value!r}")
-        if not 0.5 <= prestretch <= 2.0:
-            raise ParameterError(f"prestretch must be within [0.5, 2], not {prestretch!r}")
-        for name, value in dict(x2d=x2d, x2h=x2h).items():
-            if not value >= 0:
-                raise ParameterError(f"{name} must be non-negative, not {value!r}")
-        if not isinstance(mesh, MeshSettings):
-            mesh = MeshSettings.from_dict(mesh)
-        if mesh.engine not in ("auto", "fast", "felupe"):
+    def __init__(self, skin, probe=6.0, mesh=None, poisson=0.49):
+        if not isinstance(skin, Skin):
             raise ParameterError(
-                f"engine must be 'auto', 'fast' or 'felupe', not {mesh.engine!r}"
-            )
-        fast_applies = mesh.formulation == "displacement" and mesh.edge_radius == 0
-        if mesh.engine == "fast" and not fast_applies:
-            raise ParameterError(
-                "the fast engine assembles the displacement formulation with a sharp "
-                "probe edge only: use engine 'felupe' for formulation 'mixed' or "
-                "edge_radius > 0"
-            )
-
+                f"the model takes a Skin (e.g. Skin.two_layer(x1d, x1h)), not {skin!r}")
+        probe_mm = _probe_mm(probe)
+        mesh = _mesh_settings(mesh)
+        fast_applies = _fast_applies(mesh)
+        self.skin = skin
+        self.layer_names = skin.names
         self.settings = mesh
-        self.parameters = dict(
-            x1d=x1d, x1h=x1h, x2d=x2d, x2h=x2h, t_d=t_d, t_h=t_h,
-            probe_mm=probe_mm, bottom=bottom, poisson=poisson, prestretch=prestretch,
-        )
-        self.mesh, is_dermis = suction_mesh(probe_mm, t_d, t_h, mesh)
+        self.parameters = dict(skin=skin.to_dict(), probe_mm=probe_mm, bottom=skin.bottom,
+                               poisson=poisson)
+        try:  # the two-layer records keep the keys they always had
+            self.parameters.update(skin.two_layer_values())
+        except ParameterError:
+            pass
+        bottom = skin.bottom
+        depth = skin.depth
+        self.mesh, self.layer = suction_mesh(probe_mm, skin.thicknesses, mesh)
         a = probe_mm / 2
         # the skin is glued to the probe's face outside the rounded edge
         a_glued = a * (1 + mesh.edge_radius)
@@ -149,7 +179,7 @@ class SuctionTest:
             # the glued face, so it is fixed with it
             self.mesh.update(points=np.vstack([self.mesh.points, [0.0, a_glued]]))
         z, r = self.mesh.points.T
-        tol = 1e-9 * (a + t_d + t_h)
+        tol = 1e-9 * (a + depth)
 
         quadrature = fem.GaussLegendre(order=2 if mesh.quadrature == "full" else 1, dim=2)
         if mesh.element == "quad9":
@@ -160,20 +190,15 @@ class SuctionTest:
             Boundary = fem.RegionQuadraticQuadBoundary
         self.field = fem.FieldContainer([fem.FieldAxisymmetric(region, dim=2)])
 
-        x1 = np.where(is_dermis, x1d, x1h)
-        x2 = np.where(is_dermis, x2d, x2h)
+        x1 = np.array([layer.X1 for layer in skin.layers])[self.layer]
+        x2 = np.array([layer.X2 for layer in skin.layers])[self.layer]
         F0 = None
-        if prestretch != 1.0:
+        if skin.has_prestretch:
             if mesh.formulation == "mixed":
                 raise ParameterError("prestretch needs the displacement formulation")
             # the mesh is the pre-stretched skin (thicknesses as measured in vivo);
             # each layer contracts through its thickness so the surface is free
-            axial = np.where(
-                is_dermis,
-                thickness_stretch(prestretch, x1d, x2d, poisson),
-                thickness_stretch(prestretch, x1h, x2h, poisson),
-            )
-            F0 = np.stack([axial, np.full_like(axial, prestretch), np.full_like(axial, prestretch)])
+            F0 = layer_prestretch(skin, poisson)[self.layer].T
         if mesh.formulation == "mixed":
             # cell-wise constant pressure and volume ratio (condensed): the volumetric
             # penalty acts on the mean dilatation of a cell, which avoids locking
@@ -218,12 +243,12 @@ class SuctionTest:
                 u, mask=np.isclose(z, 0, atol=tol) & (r >= a_glued - tol)
             ),
         }
-        bottom_nodes = np.isclose(z, -(t_d + t_h), atol=tol)
+        bottom_nodes = np.isclose(z, -depth, atol=tol)
         if bottom == "fixed":
             boundaries["bottom"] = fem.Boundary(u, mask=bottom_nodes)
         elif bottom == "axial":
             boundaries["bottom"] = fem.Boundary(u, mask=bottom_nodes, skip=(0, 1))
-        if prestretch != 1.0:
+        if skin.has_prestretch:
             # the skin beyond the model holds the in-plane tension
             boundaries["outer"] = fem.Boundary(
                 u, mask=np.isclose(r, r.max(), atol=tol), skip=(1, 0)
@@ -502,74 +527,59 @@ class SuctionTest:
 
 
 def simulate(
-    x1d,
-    x1h,
-    x2d=0.0,
-    x2h=0.0,
-    t_d=1.0,
-    t_h=1.0,
-    probe_mm=6.0,
-    bottom="fixed",
+    skin,
+    probe=6.0,
     pressures_mbar=None,
     mesh=None,
-    prestretch=1.0,
     iteration_budget=None,
     progress=None,
     engine=None,
     stall_after=8,
 ):
-    """Apex deflection M(p) of a two-layer skin model under a suction probe.
+    """Apex deflection M(p) of a skin under a suction probe.
 
     Parameters
     ----------
-    x1d, x1h : float
-        X1 of the dermis and the hypodermis in MPa (``W = X1 (I1 - 3) + ...``).
-    x2d, x2h : float, optional
-        X2 of the dermis and the hypodermis in MPa (0 is neo-Hookean).
-    t_d, t_h : float, optional
-        Thickness of the dermis and the hypodermis in mm.
-    probe_mm : float, optional
-        Aperture diameter in mm (2 and 6 mm in the paper).
-    bottom : {"fixed", "axial", "free"}, optional
-        Bottom boundary condition.
-    pressures_mbar : array_like, optional
+    skin : Skin
+        The stack of layers and the bottom condition (e.g.
+        ``Skin.two_layer(x1d, x1h)``, the paper's dermis over hypodermis, 1 mm
+        each; :meth:`Skin.with_layer_on_top` adds a superficial layer). A layer's
+        ``prestretch`` is its equibiaxial in-plane pre-stretch lambda0 (natural skin
+        tension), applied before the probe is glued: each layer contracts through
+        its thickness so that the surface stays traction-free, and the outer radius
+        holds the tension; the thicknesses are those of the pre-stretched skin.
+    probe : Probe or float, optional
+        The probe, or its aperture diameter in mm (2 and 6 mm in the paper).
+    pressures_mbar : array_like or Ramp, optional
         Suction pressures in mbar, from 0, ascending (default 0, 2, ..., 100).
     mesh : dict or MeshSettings, optional
         Discretisation settings (see :class:`MeshSettings`).
-    prestretch : float, optional
-        Equibiaxial in-plane pre-stretch lambda0 of both layers (natural skin
-        tension), applied before the probe is glued; the layers contract through
-        their thickness so that the surface stays traction-free, and the outer
-        radius holds the tension. The thicknesses are those of the pre-stretched
-        skin. 1 is none.
     iteration_budget : int, optional
         Newton iterations before the solver gives up (default 20 per pressure).
     progress : callable, optional
         Called as ``progress(k, n, pressure_mbar)`` after each pressure reached.
-    stall_after : int, optional
-        Newton iterations of an increment before a stalled one is cut back.
     engine : {"auto", "fast", "felupe"}, optional
         Overrides the mesh settings' ``engine``: the model's own assembly
         (``"auto"``, the default, takes it wherever it applies) or FElupe's, the
         reference. ``Curve.info["engine"]`` says which ran.
+    stall_after : int, optional
+        Newton iterations of an increment before a stalled one is cut back.
 
     Returns
     -------
     Curve
         The deflection curve; ``converged`` is False if the solver stopped early.
+        ``Curve.info["skin"]`` records the skin.
 
     Examples
     --------
-    >>> curve = simulate(0.08, 4.1e-4, probe_mm=2, pressures_mbar=[0, 50, 100],
+    >>> curve = simulate(Skin.two_layer(0.08, 4.1e-4), probe=2, pressures_mbar=[0, 50, 100],
     ...                  mesh={"refinement": 0.5})
     >>> curve.converged, bool(0.02 < curve.deflection_mm[-1] < 0.04)
     (True, True)
     """
-    if engine is not None:
-        settings = mesh.to_dict() if isinstance(mesh, MeshSettings) else dict(mesh or {})
-        mesh = {**settings, "engine": engine}
-    model = SuctionTest(
-        x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom, mesh, prestretch=prestretch
-    )
+    if isinstance(pressures_mbar, Ramp):
+        pressures_mbar = pressures_mbar.pressures_mbar
+    model = SuctionTest(skin, probe, _mesh_settings(mesh, engine))
     return model.run(pressures_mbar, iteration_budget=iteration_budget, progress=progress,
                      stall_after=stall_after)

@@ -235,6 +235,7 @@ def fe_in_the_loop(*, target, bounds, probe_mm=6.0, bottom="fixed", mesh=None,
 
     if simulate is None:
         from skinsuction.model import simulate
+    from skinsuction.model import Skin
     mesh = dict(mesh or {})
     p = np.asarray(pressures_mbar if pressures_mbar is not None else np.arange(0, 101, 10.0),
                    dtype=float)
@@ -242,8 +243,7 @@ def fe_in_the_loop(*, target, bounds, probe_mm=6.0, bottom="fixed", mesh=None,
     target = np.asarray(target, dtype=float)
 
     t0 = time.perf_counter()
-    ref = simulate(target[0], target[1], probe_mm=probe_mm, bottom=bottom,
-                   pressures_mbar=p, mesh=mesh)
+    ref = simulate(Skin.two_layer(target[0], target[1], bottom=bottom), probe=probe_mm, pressures_mbar=p, mesh=mesh)
     target_seconds = time.perf_counter() - t0
     ok = np.isfinite(np.asarray(ref.deflection_mm, dtype=float))
     measured = np.asarray(ref.deflection_mm, dtype=float)
@@ -258,7 +258,7 @@ def fe_in_the_loop(*, target, bounds, probe_mm=6.0, bottom="fixed", mesh=None,
         if len(history) >= max_fe_solves:
             raise _Budget
         s0 = time.perf_counter()
-        c = simulate(x[0], x[1], probe_mm=probe_mm, bottom=bottom, pressures_mbar=p, mesh=mesh)
+        c = simulate(Skin.two_layer(x[0], x[1], bottom=bottom), probe=probe_mm, pressures_mbar=p, mesh=mesh)
         m = np.asarray(c.deflection_mm, dtype=float)
         r = np.where(np.isfinite(m[ok]), measured[ok] - m[ok], 1.0)  # 1 mm: not converged
         cost = 0.5 * float(r @ r)

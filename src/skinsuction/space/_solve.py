@@ -33,6 +33,34 @@ def _splice(curve, other, pressures):
     return dataclasses.replace(other, deflection_mm=merged, info=info), float(pressures[k])
 
 
+#: a grid point's keys that describe the paper's two-layer skin (the rest: the probe)
+TWO_LAYER_KEYS = ("x1d", "x1h", "x2d", "x2h", "t_d", "t_h", "bottom", "prestretch")
+
+
+def two_layer_skin(model, params):
+    """The skin and probe (mm) of a grid point or ray's flat parameters.
+
+    Parameters
+    ----------
+    model : module
+        The forward model (:mod:`skinsuction.model`, or a workflow test's stand-in).
+    params : dict
+        ``x1d, x1h`` and optionally ``x2d, x2h, t_d, t_h, bottom, prestretch,
+        probe_mm``.
+
+    Returns
+    -------
+    (Skin, float)
+    """
+    unknown = set(params) - set(TWO_LAYER_KEYS) - {"probe_mm"}
+    if unknown:
+        raise getattr(model, "ParameterError", ValueError)(
+            f"unknown model parameter(s) {sorted(unknown)}; a grid point has "
+            f"{list(TWO_LAYER_KEYS) + ['probe_mm']}")
+    skin = model.Skin.two_layer(**{k: v for k, v in params.items() if k in TWO_LAYER_KEYS})
+    return skin, params.get("probe_mm", 6.0)
+
+
 def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None, fallback=None,
                          label: str = "model", splice: bool = False):
     """Solve the FE model, then the fallback meshes in order while it stops early.
@@ -78,7 +106,8 @@ def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None,
             extra = {} if budget is None else {"iteration_budget": budget}
             if stall_after is not None:
                 extra["stall_after"] = stall_after
-            curve = simulate(**params, pressures_mbar=pressures, mesh=settings, **extra)
+            skin, probe = two_layer_skin(model, params)
+            curve = simulate(skin, probe, pressures_mbar=pressures, mesh=settings, **extra)
         except ParameterError as err:
             # refused parameters or mesh settings are the configuration's error, not a
             # non-converged point: the job fails, loudly, naming them

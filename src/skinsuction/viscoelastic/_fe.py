@@ -1,4 +1,4 @@
-"""The suction test in time: the two-layer model with a relaxation spectrum per layer.
+"""The suction test in time: a stack of layers with a relaxation spectrum per layer.
 
 Formulation (finite strain, internal variables; Simo 1987, Holzapfel 1996, in the
 quasi-linear form of Fung): each layer's second Piola-Kirchhoff stress is its
@@ -55,7 +55,6 @@ import numpy as np
 from ..model import MeshSettings, ParameterError, SuctionTest
 from ..model._fast import _SWAP, FastAssembly, _material
 from ..model._simulate import NoEquilibrium
-from ._prony import layer_spectra
 
 BRANCHES = ("full", "isochoric", "whole_tensor")
 
@@ -253,48 +252,43 @@ class History:
 
 
 class ViscoelasticSuctionTest:
-    """The two-layer suction-test model with a relaxation spectrum per layer,
-    solved in time (see the module for the formulation).
+    """The suction-test model of a stack of layers with a relaxation spectrum per
+    layer, solved in time (see the module for the formulation).
 
     Parameters
     ----------
-    x1d, x1h : float
-        Long-time (equilibrium) X1 of the dermis and the hypodermis, MPa.
-    prony : Prony or dict or pair, optional
-        The spectrum: one shared by both layers, or ``{"dermis": ..., "hypodermis":
-        ...}`` (a missing layer is elastic). None: elastic.
+    skin : Skin
+        The layers, each with its long-time (equilibrium) moduli X1, X2 and its
+        relaxation spectrum (``Layer.spectrum``; X2 relaxes with X1), and the
+        bottom. A pre-stretch is taken as relaxed at t = 0 (held for long before
+        the test).
+    probe : Probe or float
+        The probe, or its aperture diameter in mm.
+    mesh : MeshSettings or dict, optional
+        As :class:`skinsuction.model.SuctionTest` (the fast engine only).
     branches : {"full", "isochoric", "whole_tensor"}
         What the branches carry: the isochoric tensor and the penalty's pressure as
         a scalar (default; nu = 0.49 at every rate), the isochoric part only (the
         bulk modulus does not relax), or the whole stress as one tensor (a warning,
         see the module).
-    x2d, x2h, t_d, t_h, probe_mm, bottom, mesh, prestretch
-        As :class:`skinsuction.model.SuctionTest` (the fast engine only). X2 relaxes
-        with X1. A pre-stretch is taken as
-        relaxed at t = 0 (held for long before the test).
     """
 
-    def __init__(self, x1d, x1h, prony=None, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0,
-                 probe_mm=6.0, bottom="fixed", mesh=None, prestretch=1.0, branches="full"):
+    def __init__(self, skin, probe=6.0, mesh=None, branches="full"):
         settings = mesh.to_dict() if isinstance(mesh, MeshSettings) else dict(mesh or {})
         if settings.get("engine", "auto") == "felupe":
             raise ParameterError("the viscoelastic model runs on the fast engine only")
-        self.model = SuctionTest(x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom,
-                                 {**settings, "engine": "fast"}, prestretch=prestretch)
-        dermis, hypodermis = layer_spectra(prony)
-        self.spectra = {"dermis": dermis, "hypodermis": hypodermis}
+        self.model = SuctionTest(skin, probe, {**settings, "engine": "fast"})
+        self.spectra = {layer.name: layer.spectrum for layer in skin.layers}
         fast = self.model.fast
-        # the layer of each cell: the mesh has a node line on the interface z = -t_d
-        cells = self.model.mesh.cells[:, :4]
-        z_centre = self.model.mesh.points[cells, 0].mean(axis=1)
-        is_dermis = np.repeat(z_centre > -t_d, fast.nq)
-        nb = max(dermis.terms, hypodermis.terms)
-        g = np.zeros((nb, is_dermis.size))
-        tau = np.ones((nb, is_dermis.size))
-        for k in range(nb):
-            for layer, mask in ((dermis, is_dermis), (hypodermis, ~is_dermis)):
-                if k < layer.terms:
-                    g[k, mask], tau[k, mask] = layer.g[k], layer.tau_s[k]
+        # the layer of each Gauss point (the mesh has a node line on every interface)
+        layer = np.repeat(self.model.layer, fast.nq)
+        nb = max(spectrum.terms for spectrum in self.spectra.values())
+        g = np.zeros((nb, layer.size))
+        tau = np.ones((nb, layer.size))
+        for index, spectrum in enumerate(self.spectra.values()):
+            mask = layer == index
+            for k in range(spectrum.terms):
+                g[k, mask], tau[k, mask] = spectrum.g[k], spectrum.tau_s[k]
         self.assembly = ViscousAssembly.from_elastic(fast, g, tau, branches)
         self.model.fast = self.assembly  # the model's Newton pieces now assemble it
         self.parameters = dict(
@@ -450,11 +444,9 @@ class ViscoelasticSuctionTest:
         )
 
 
-def simulate_history(x1d, x1h, prony, times_s, pressures_mbar, probe_mm=6.0, x2d=0.0,
-                     x2h=0.0, t_d=1.0, t_h=1.0, bottom="fixed", mesh=None, prestretch=1.0,
-                     branches="full", max_step_s=None, tol=1e-6, iteration_budget=None,
-                     progress=None):
-    """Apex deflection against time of the two-layer model with relaxation spectra.
+def simulate_history(skin, times_s, pressures_mbar, probe=6.0, mesh=None, branches="full",
+                     max_step_s=None, tol=1e-6, iteration_budget=None, progress=None):
+    """Apex deflection against time of a skin whose layers carry relaxation spectra.
 
     The elastic model of :func:`skinsuction.model.simulate` (X1 the long-time
     moduli) with each layer's Prony series (instantaneous moduli ``X1 (1 + sum
@@ -463,15 +455,15 @@ def simulate_history(x1d, x1h, prony, times_s, pressures_mbar, probe_mm=6.0, x2d
 
     Parameters
     ----------
-    x1d, x1h : float
-        Long-time X1 of the dermis and the hypodermis, MPa.
-    prony : Prony or dict or pair or None
-        One spectrum for both layers, or one per layer (see
-        :class:`ViscoelasticSuctionTest`).
+    skin : Skin
+        The layers, with their spectra (``Skin.two_layer(x1d, x1h, spectrum=...)``
+        shares one spectrum or takes one per layer).
     times_s, pressures_mbar : array_like
         The history: times (s, increasing) and suction (mbar, from 0). See
         :func:`skinsuction.viscoelastic.mode1_history` and ``mode2_history``.
-    probe_mm, x2d, x2h, t_d, t_h, bottom, mesh, prestretch
+    probe : Probe or float
+        The probe, or its aperture diameter in mm.
+    mesh : dict or MeshSettings, optional
         As :func:`skinsuction.model.simulate`.
     branches : {"full", "isochoric", "whole_tensor"}
         What the branches relax (see :class:`ViscoelasticSuctionTest`).
@@ -488,13 +480,13 @@ def simulate_history(x1d, x1h, prony, times_s, pressures_mbar, probe_mm=6.0, x2d
     the skin jumps to the instantaneous response and creeps towards the long-time
     one (``X1 (1 + g)`` = 2 ``X1`` here: about half the long-time deflection).
 
-    >>> from skinsuction.viscoelastic import Prony
-    >>> h = simulate_history(0.08, 4.1e-3, Prony([1.0], [0.2]), [0, 0.001, 0.2, 1.0, 3.0],
-    ...                      [0, 40, 40, 40, 40], mesh={"refinement": 0.5}, max_step_s=0.05)
+    >>> from skinsuction.model import Prony, Skin
+    >>> skin = Skin.two_layer(0.08, 4.1e-3, spectrum=Prony([1.0], [0.2]))
+    >>> h = simulate_history(skin, [0, 0.001, 0.2, 1.0, 3.0], [0, 40, 40, 40, 40],
+    ...                      mesh={"refinement": 0.5}, max_step_s=0.05)
     >>> h.converged, [round(float(v / h.deflection_mm[-1]), 2) for v in h.deflection_mm[1:]]
     (True, [0.5, 0.69, 0.96, 1.0])
     """
-    model = ViscoelasticSuctionTest(x1d, x1h, prony, x2d, x2h, t_d, t_h, probe_mm, bottom,
-                                    mesh, prestretch, branches)
+    model = ViscoelasticSuctionTest(skin, probe, mesh, branches)
     return model.run(times_s, pressures_mbar, max_step_s=max_step_s, tol=tol,
                      iteration_budget=iteration_budget, progress=progress)
