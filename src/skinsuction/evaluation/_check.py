@@ -58,7 +58,7 @@ def fe_check(report: dict, mesh=None, bottom="fixed", causes: dict | None = None
     Returns a long DataFrame: ``panel, model, probe_mm, pressure_mbar,
     measured_mm, fe_mm, interpolated_mm, converged`` plus the parameters.
     """
-    from skinsuction.model import simulate
+    from skinsuction.model import Skin, simulate
 
     rows = []
     for panel, (label, name, params, cand) in enumerate(models_of_figure6(report)):
@@ -67,7 +67,7 @@ def fe_check(report: dict, mesh=None, bottom="fixed", causes: dict | None = None
         for probe, d in report["data"].items():
             p = np.asarray(d["pressure_mbar"], dtype=float)
             grid = np.concatenate([[0.0], p]) if p[0] > 0 else p
-            c = simulate(**kw, probe_mm=float(probe), bottom=bottom, pressures_mbar=grid,
+            c = simulate(Skin.two_layer(**kw, bottom=bottom), float(probe), pressures_mbar=grid,
                          mesh=dict(mesh or {}))
             fe = c.deflection_mm[-p.size:]
             rows.append(pd.DataFrame({

@@ -53,6 +53,7 @@ def virtual_curve(x1d, x1h, prony, suction, *, probe_mm=6.0, rate_hz=100.0, nois
     switch; the deflection gets Gaussian noise of ``noise_mm`` (``seed``) and is
     rounded to ``resolution_mm``; the suction is written to 1 mbar.
     """
+    from skinsuction.model import Skin
     from skinsuction.viscoelastic import simulate_history
 
     p_of, switches, duration = suction
@@ -60,7 +61,8 @@ def virtual_curve(x1d, x1h, prony, suction, *, probe_mm=6.0, rate_hz=100.0, nois
     t = np.round(np.arange(0.0, duration + dt / 2, dt), 9)
     fine = [s + 1e-3 * 2.0 ** k for s in switches for k in range(6)]
     tf = np.unique(np.round(np.concatenate([t, fine]), 9))
-    h = simulate_history(x1d, x1h, prony, tf, p_of(tf), probe_mm=probe_mm, mesh=mesh)
+    h = simulate_history(Skin.two_layer(x1d, x1h, spectrum=prony), tf, p_of(tf), probe=probe_mm,
+                         mesh=mesh)
     if not h.converged:
         raise RuntimeError(f"FE time solve stopped: {h.reason}")
     exact = np.interp(t, tf, h.deflection_mm)
