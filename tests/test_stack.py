@@ -184,3 +184,17 @@ def test_each_layer_relaxes_with_its_own_spectrum():
 def test_node_lines_outside_the_stack_are_refused():
     with pytest.raises(ParameterError, match="node_lines_mm"):
         simulate(PAPER, 2, mesh=MeshSettings(node_lines_mm=(2.5,)))
+
+
+def test_a_cause_frees_named_paths_and_sets_them_as_its_grid_keyword_does():
+    """Each registry cause's paths on a skin are the same model as its two-layer
+    grid keyword (what the spaces solve): one description, two ways in."""
+    from skinsuction.space import default_registry
+
+    base = dict(x1d=0.04, x1h=5e-4)
+    for cause in default_registry().values():
+        for coordinate in (cause.nodes[0], cause.nodes[-1]):
+            by_paths = cause.apply(Skin.two_layer(**base), coordinate)
+            by_keyword = Skin.two_layer(**base, **cause.simulate_keywords(coordinate, 0.04))
+            assert by_paths == by_keyword, cause.name
+            assert all(p.split(".")[0] in by_paths.names for p in cause.paths)

@@ -46,6 +46,16 @@ SCALES = {
 #: thickness (file header, study column, option) takes out of the diagnosis.
 GEOMETRY_KEYWORDS = ("t_d", "t_h")
 
+#: The parameter paths of the skin (:class:`skinsuction.model.Skin`) that a
+#: cause's keyword frees: the one place the two-layer keywords meet the skin.
+KEYWORD_PATHS = {
+    "x2d": ("dermis.X2",),
+    "x2h": ("hypodermis.X2",),
+    "t_d": ("dermis.thickness",),
+    "t_h": ("hypodermis.thickness",),
+    "prestretch": ("dermis.prestretch", "hypodermis.prestretch"),
+}
+
 #: Name of the verdict "the neo-Hookean model explains the data".
 NONE = "none"
 #: Name of the baseline model (and of its ray space).
@@ -61,8 +71,9 @@ class Cause:
     name : str
         Registry key, e.g. ``"strain_stiffening"``.
     keyword : str
-        Keyword of :func:`skinsuction.model.simulate` that sets the parameter
-        (``x2d``, ``t_d``, ``prestretch``, ...).
+        Keyword of the two-layer grid point that sets the parameter (``x2d``,
+        ``t_d``, ``prestretch``, ...); :attr:`paths` names the skin parameters it
+        frees (:data:`KEYWORD_PATHS`), :meth:`apply` sets them on a skin.
     symbol : str
         Name of the parameter in reports (``X2d``, ``t_d``, ``lambda0``).
     unit : str
@@ -161,8 +172,42 @@ class Cause:
         return float(out) if np.ndim(out) == 0 else out
 
     def simulate_keywords(self, coordinate, x1d) -> dict:
-        """Keywords of :func:`skinsuction.model.simulate` for this coordinate."""
+        """The two-layer grid point's keyword for this coordinate (``{"x2d": ...}``)."""
         return {self.keyword: float(self.value(coordinate, x1d))}
+
+    @property
+    def paths(self) -> tuple:
+        """The parameter paths of the skin this cause frees (e.g. ``("dermis.X2",)``;
+        pre-tension frees the pre-stretch of every layer)."""
+        try:
+            return KEYWORD_PATHS[self.keyword]
+        except KeyError:
+            raise ValueError(f"cause {self.name!r}: keyword {self.keyword!r} names no skin "
+                             f"parameter; known: {sorted(KEYWORD_PATHS)}") from None
+
+    def apply(self, skin, coordinate):
+        """The skin with this cause's parameter at a ray coordinate.
+
+        Parameters
+        ----------
+        skin : Skin
+            The neo-Hookean skin (its dermis X1 scales a modulus cause).
+        coordinate : float
+            The ray coordinate (``value / X1d`` for a modulus, else the value).
+
+        Returns
+        -------
+        Skin
+
+        Examples
+        --------
+        >>> from skinsuction.model import Skin
+        >>> stiff = default_registry()["strain_stiffening"].apply(Skin.two_layer(0.05, 5e-4), 2.0)
+        >>> stiff.get("dermis.X2")
+        0.1
+        """
+        value = float(self.value(coordinate, skin.get("dermis.X1")))
+        return skin.replace({path: value for path in self.paths})
 
     def to_dict(self) -> dict:
         d = asdict(self)
