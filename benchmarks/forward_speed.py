@@ -20,17 +20,16 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import felupe as fem  # noqa: E402
 import numpy as np  # noqa: E402
 
-from skinsuction.model import SuctionTest  # noqa: E402
-from skinsuction.model._simulate import MBAR_TO_MPA  # noqa: E402
+from skinsuction.model import MBAR_TO_MPA, Skin, SuctionTest  # noqa: E402
 
-REFERENCE = dict(x1d=0.08, x1h=4.1e-4)
+REFERENCE = Skin.two_layer(0.08, 4.1e-4)
 PRESSURES = np.arange(0.0, 101.0, 2.0)
 
 
 def timed_curve(probe, mesh=None, repeats=1):
     best = None
     for _ in range(repeats):
-        model = SuctionTest(**REFERENCE, probe_mm=probe, mesh=mesh)
+        model = SuctionTest(REFERENCE, probe, mesh=mesh)
         start = time.perf_counter()
         curve = model.run(PRESSURES)
         seconds = time.perf_counter() - start
@@ -40,7 +39,7 @@ def timed_curve(probe, mesh=None, repeats=1):
 
 def felupe_plain_newton(probe):
     """Same mesh and items, FElupe's newtonraphson with its defaults per step."""
-    model = SuctionTest(**REFERENCE, probe_mm=probe)
+    model = SuctionTest(REFERENCE, probe)
     start = time.perf_counter()
     iterations = 0
     for p in PRESSURES[1:]:

@@ -70,14 +70,14 @@ def main(argv=None):
         mesh = {}
     curves = {"space": {p: (s.pressure_mbar, evaluate(s, [TARGET])[0]) for p, s in spaces.items()}}
     if args.fe:
-        from skinsuction.model import simulate
+        from skinsuction.model import Skin, simulate
 
         if args.refinement is not None:
             mesh["refinement"] = args.refinement
         curves["fe"] = {}
         for p, s in spaces.items():
             t0 = time.perf_counter()
-            c = simulate(*TARGET, probe_mm=p, pressures_mbar=s.pressure_mbar, mesh=mesh)
+            c = simulate(Skin.two_layer(*TARGET), p, pressures_mbar=s.pressure_mbar, mesh=mesh)
             ok = np.isfinite(c.deflection_mm)
             curves["fe"][p] = (s.pressure_mbar[ok], np.asarray(c.deflection_mm)[ok])
             print(f"FE test curve {p:g} mm: {time.perf_counter() - t0:.1f} s, mesh {mesh}, "

@@ -6,16 +6,23 @@ solves a skin under a probe for M(p).
 """
 
 from ._curve import Curve, ParameterError
+from ._fast import SWAP, FastAssembly, material_response
 from ._geometry import MeshSettings, edge_fan, layer_breaks, suction_mesh
 from ._material import SkinLayers, bulk_modulus, prestress, thickness_stretch
 from ._prony import Prony
-from ._simulate import DEFAULT_PRESSURES_MBAR, SuctionTest, layer_prestretch, simulate
+from ._simulate import (
+    DEFAULT_PRESSURES_MBAR, MBAR_TO_MPA, NoEquilibrium, SuctionTest, layer_prestretch, simulate,
+)
 from ._skin import BOTTOM_CONDITIONS, MAX_LAYERS, Layer, Probe, Ramp, Skin
 
 __all__ = [
     "BOTTOM_CONDITIONS",
     "Curve",
     "DEFAULT_PRESSURES_MBAR",
+    "FastAssembly",
+    "MBAR_TO_MPA",
+    "NoEquilibrium",
+    "SWAP",
     "Layer",
     "MAX_LAYERS",
     "MeshSettings",
@@ -30,6 +37,7 @@ __all__ = [
     "edge_fan",
     "layer_breaks",
     "layer_prestretch",
+    "material_response",
     "prestress",
     "thickness_stretch",
     "simulate",

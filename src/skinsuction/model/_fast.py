@@ -43,11 +43,11 @@ _SUPERLU_OPTIONS = {"SymmetricMode": True, "DiagPivotThresh": 0.1}
 # S[P, Q] = iFT[i, L] iFT[k, J] for P = (i, J), Q = (k, L): index into the
 # 6-vector (iFT_zz, iFT_zr, iFT_rz, iFT_rr, iFT_hoop, 0) of the block-diagonal iFT
 _FULL = {c: n for n, c in enumerate(COMPONENTS)}
-_SWAP = np.array([[_FULL.get((i, L), 5) * 6 + _FULL.get((k, J), 5)
+SWAP = np.array([[_FULL.get((i, L), 5) * 6 + _FULL.get((k, J), 5)
                    for (k, L) in COMPONENTS] for (i, J) in COMPONENTS])
 
 
-def _material(f, x1, x2, bulk, f0=None, tangent=True):
+def material_response(f, x1, x2, bulk, f0=None, tangent=True):
     """First Piola-Kirchhoff stress (5, n) and elasticity (5, 5, n) of
     ``W = X1 (I1bar - 3) + X2 (I1bar - 3)^2 + K/2 (J - 1)^2`` at the 5 components
     ``f`` (5, n) of F at n points; ``f0`` (5, n): the columns' pre-stretch factors."""
@@ -71,7 +71,7 @@ def _material(f, x1, x2, bulk, f0=None, tangent=True):
     c2 = W1 * G * 2.0 / 3.0 * I1 - bulk * (J - 1.0) * J
     beta = -4.0 / 3.0 * W1 * G
     ext = np.concatenate([ift, np.zeros((1,) + ift.shape[1:])])
-    swap = (ext[:, None] * ext[None, :]).reshape(36, -1)[_SWAP]
+    swap = (ext[:, None] * ext[None, :]).reshape(36, -1)[SWAP]
     A = c1 * ift[:, None] * ift[None, :] + c2 * swap
     B = beta * f[:, None] * ift[None, :]
     A += B + B.transpose(1, 0, 2)
@@ -219,7 +219,7 @@ class FastAssembly:
         """
         f = self._components(u)
         with np.errstate(invalid="ignore", divide="ignore"):
-            P, _ = _material(f, self.x1, self.x2, self.bulk, self.f0, tangent=False)
+            P, _ = material_response(f, self.x1, self.x2, self.bulk, self.f0, tangent=False)
         re = (self.Bw @ P.T[:, :, None]).reshape(-1, self.nq, self.B.shape[1]).sum(axis=1)
         r = np.bincount(self.eldofs.ravel(), re.ravel(), minlength=self.ndof)
         if pressure != 0.0 and len(self.suction_edges):
@@ -238,7 +238,7 @@ class FastAssembly:
     def tangent(self, u, pressure):
         """Data array of the free-DOF tangent in the kept order (CSC, ``nnz``)."""
         f = self._components(u)
-        P, A = _material(f, self.x1, self.x2, self.bulk, self.f0)
+        P, A = material_response(f, self.x1, self.x2, self.bulk, self.f0)
         A = np.ascontiguousarray(A.transpose(2, 0, 1))  # (c q, 5, 5)
         nx = self.B.shape[1]
         Ke = ((self.Bw @ A) @ self.BT).reshape(-1, self.nq, nx, nx).sum(axis=1)

@@ -337,7 +337,20 @@ class SuctionTest:
 
     def _equilibrium(self, pressure_mbar, lu, tol, maxiter, xtol=1e-9, f=None,
                      stall_after=8, stall_window=4):
-        """Newton iterations at one pressure, in place on the displacement field.
+        """Newton iterations at one pressure, in place on the displacement field
+        (:meth:`newton`). ``f`` is the residual of the current state at this
+        pressure, if known. Returns the tangent in use and the number of iterations.
+        """
+        self._set_pressure(pressure_mbar)
+        if f is None:
+            f = self._residual()
+        lu, iterations, _ = self.newton(lu, tol, maxiter, f, 0.0, xtol, stall_after,
+                                        stall_window)
+        return lu, iterations
+
+    def newton(self, lu, tol, maxiter, f, floor=0.0, xtol=1e-9, stall_after=8,
+               stall_window=4):
+        """Newton's method at the current load, in place on the displacement field.
 
         The factorised tangent ``lu`` (of an earlier increment, if given) serves
         while it cuts the residual tenfold an iteration; otherwise, and from the
@@ -345,22 +358,39 @@ class SuctionTest:
         that inverts an element (non-finite residual) is halved before it is
         accepted. An increment whose residual has not halved in ``stall_window``
         iterations, after ``stall_after``, is given up (the caller cuts it back).
-        ``f`` is the residual of the current state at this pressure, if known.
-        Returns the tangent in use and the number of iterations.
+
+        Parameters
+        ----------
+        lu : factors or None
+            A tangent to start with.
+        tol : float
+            Residual of the free DOFs relative to the reactions (floored by
+            ``floor``: a time step after a release, where both vanish).
+        maxiter : int
+            Iterations before :class:`NoEquilibrium` is raised.
+        f : ndarray
+            The residual of the current state.
+        floor : float
+            Smallest reaction norm the criterion divides by.
+        xtol : float
+            A correction below ``xtol`` of the displacement also ends it.
+        stall_after, stall_window : int
+            The stall rule above.
+
+        Returns
+        -------
+        (factors, int, ndarray)
+            The tangent in use, the iterations spent and the final residual.
         """
-        self._set_pressure(pressure_mbar)
         u = self.field[0].values.reshape(-1)
-        if f is None:
-            f = self._residual()
         history = []  # residual norms of this increment's iterations
         for iteration in range(1, maxiter + 1):
             if not np.all(np.isfinite(f)):
                 raise NoEquilibrium("an element is inverted", iteration - 1)
             r1 = f[self.dof1]
             norm_r1 = np.linalg.norm(r1)
-            reactions = np.linalg.norm(f[self.dof0])
-            if norm_r1 <= tol * reactions:
-                return lu, iteration - 1
+            if norm_r1 <= tol * max(np.linalg.norm(f[self.dof0]), floor):
+                return lu, iteration - 1, f
             history.append(norm_r1)
             # full Newton from the 3rd iteration on contracts a sound increment
             # quadratically; one that has not halved its residual in 4 of them
@@ -388,7 +418,7 @@ class SuctionTest:
             # when the loads are tiny against the moduli, the residual stalls at its
             # round-off floor first: then a negligible correction means converged
             if np.all(np.isfinite(f)) and np.linalg.norm(du) <= xtol * np.linalg.norm(u_start + du):
-                return lu, iteration
+                return lu, iteration, f
         raise NoEquilibrium(f"no convergence in {maxiter} iterations", maxiter)
 
     def run(

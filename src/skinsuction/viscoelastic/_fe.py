@@ -53,8 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..model import MeshSettings, ParameterError, SuctionTest
-from ..model._fast import _SWAP, FastAssembly, _material
-from ..model._simulate import NoEquilibrium
+from ..model import SWAP, FastAssembly, NoEquilibrium, material_response
 
 BRANCHES = ("full", "isochoric", "whole_tensor")
 
@@ -90,7 +89,7 @@ def _inverse_transpose(f):
     det2 = a * d - b * c
     ift = np.stack([d / det2, -c / det2, -b / det2, a / det2, 1.0 / h])
     ext = np.concatenate([ift, np.zeros((1,) + ift.shape[1:])])
-    swap = (ext[:, None] * ext[None, :]).reshape(36, -1)[_SWAP]  # iFT_iL iFT_kJ
+    swap = (ext[:, None] * ext[None, :]).reshape(36, -1)[SWAP]  # iFT_iL iFT_kJ
     return ift, -swap.transpose(2, 0, 1)
 
 
@@ -157,12 +156,12 @@ class ViscousAssembly(FastAssembly):
         x1, x2, bulk = self.base
         zero = np.zeros_like(bulk)
         with np.errstate(invalid="ignore", divide="ignore"):
-            P, _ = _material(f, x1, x2, bulk if self.branches == "whole_tensor" else zero,
+            P, _ = material_response(f, x1, x2, bulk if self.branches == "whole_tensor" else zero,
                              self.f0, tangent=False)
             S = second_piola(f, P)
             if self.branches != "full":
                 return S, np.zeros(f.shape[1])
-            Pv, _ = _material(f, zero, zero, bulk, self.f0, tangent=False)
+            Pv, _ = material_response(f, zero, zero, bulk, self.f0, tangent=False)
             return S, Pv[4] * f[4]  # P_vol = pi F^-T: its hoop component is pi / F_hoop
 
     def begin_step(self, dt):
@@ -300,38 +299,6 @@ class ViscoelasticSuctionTest:
     def dofs(self):
         return self.model.dofs
 
-    def _newton(self, lu, tol, maxiter, f, floor, xtol=1e-9, stall_after=8, stall_window=4):
-        """Newton's method at the current pressure and step, in place (the policy of
-        :meth:`SuctionTest._equilibrium`, whose criterion is relative to the
-        reactions; here they are floored by ``floor``, since after a release they
-        and the residual both vanish as the skin recovers)."""
-        m = self.model
-        u = m.field[0].values.reshape(-1)
-        history = []
-        for iteration in range(1, maxiter + 1):
-            if not np.all(np.isfinite(f)):
-                raise NoEquilibrium("an element is inverted", iteration - 1)
-            r1 = f[m.dof1]
-            norm_r1 = np.linalg.norm(r1)
-            if norm_r1 <= tol * max(np.linalg.norm(f[m.dof0]), floor):
-                return lu, iteration - 1, f
-            history.append(norm_r1)
-            if iteration > stall_after and norm_r1 > 0.5 * min(history[:-stall_window]):
-                raise NoEquilibrium(f"no contraction in {stall_window} iterations", iteration - 1)
-            if lu is None or iteration > 2 or (iteration > 1 and norm_r1 > 0.1 * history[-2]):
-                lu = m._tangent()
-            du = lu.solve(-r1)
-            u_start = u[m.dof1].copy()
-            for _ in range(6):
-                u[m.dof1] = u_start + du
-                f = m._residual()
-                if np.all(np.isfinite(f)):
-                    break
-                du *= 0.5
-            if np.all(np.isfinite(f)) and np.linalg.norm(du) <= xtol * np.linalg.norm(u_start + du):
-                return lu, iteration, f
-        raise NoEquilibrium(f"no convergence in {maxiter} iterations", maxiter)
-
     def run(self, times_s, pressures_mbar, max_step_s=None, tol=1e-6, maxiter=25,
             min_step_fraction=1e-4, iteration_budget=None, progress=None):
         """Solve the pressure history ``p(t)``, piecewise linear between the given
@@ -408,7 +375,7 @@ class ViscoelasticSuctionTest:
                             u[:] = u_now
                 try:
                     with np.errstate(all="ignore"):
-                        lu, used, f = self._newton(lu, tol, maxiter, f, 1e-3 * peak)
+                        lu, used, f = self.model.newton(lu, tol, maxiter, f, 1e-3 * peak)
                     iterations += used
                     if used > 2:
                         lu = None
