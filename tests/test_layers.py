@@ -13,12 +13,13 @@ from pathlib import Path
 
 import pytest
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+ROOT = Path(__file__).resolve().parents[1]
+SRC = ROOT / "src"
 PACKAGE = SRC / "skinsuction"
 
 LAYERS = [
     {"errors", "_files", "_threads", "_argtypes", "_progress", "provenance", "noise", "config",
-     "measured"},
+     "measured", "jobs"},
     {"model"},
     {"viscoelastic"},
     {"space"},
@@ -151,6 +152,7 @@ def test_an_fe_job_imports_nothing_above_the_space():
 
     code = (
         "import sys\n"
+        "from skinsuction.jobs import job\n"  # the preamble of every workflow script
         "from skinsuction.space import compute_point, compute_bundle\n"
         "from skinsuction import model\n"
         "import skinsuction.space._solve, skinsuction.space._ray_solve\n"
@@ -164,3 +166,92 @@ def test_an_fe_job_imports_nothing_above_the_space():
         "identify", "diagnose", "paper", "cohort", "cli", "figures"}}
     assert not above, above
     assert "scipy.stats" not in loaded
+
+
+# ------------------------------------------------------------- the workflow's scripts
+SCRIPTS = sorted((ROOT / "workflow" / "scripts").glob("*.py"))
+
+
+def private_imports(path: Path) -> list:
+    """The private skinsuction names a script imports: a module or name below
+    ``skinsuction`` whose part starts with ``_`` (``skinsuction._files``,
+    ``skinsuction.diagnose._time``, ``from skinsuction.space import _rays``); dunders
+    such as ``__version__`` are public."""
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:  # a script is no package: a relative import is refused too
+                out.append("." * node.level + (node.module or ""))
+                continue
+            names = [node.module or ""] + [f"{node.module}.{a.name}" for a in node.names]
+        else:
+            continue
+        for name in names:
+            parts = name.split(".")
+            if parts[0] == "skinsuction" and any(
+                    p.startswith("_") and not (p.startswith("__") and p.endswith("__"))
+                    for p in parts[1:]):
+                out.append(name)
+    return sorted(set(out))
+
+
+def test_every_workflow_script_is_checked():
+    assert len(SCRIPTS) >= 20 and ROOT / "workflow" / "scripts" / "simulate_point.py" in SCRIPTS
+
+
+@pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.name)
+def test_workflow_scripts_import_public_names_only(script):
+    # a script is a thin adapter of the package's public face: a private module it
+    # imports could change or move without its package's own tests noticing
+    private = private_imports(script)
+    assert not private, f"{script.name} imports private names: {private}"
+
+
+def test_the_script_checker_sees_a_private_import(tmp_path):
+    script = tmp_path / "s.py"
+    script.write_text("from skinsuction._threads import limit_threads\n"
+                      "import skinsuction.space._rays\n"
+                      "with job(log):\n"
+                      "    from skinsuction.diagnose import _confusion, Settings\n"
+                      "    from skinsuction import __version__, jobs\n")
+    assert private_imports(script) == ["skinsuction._threads", "skinsuction._threads.limit_threads",
+                                       "skinsuction.diagnose._confusion",
+                                       "skinsuction.space._rays"]
+    script.write_text("from skinsuction.jobs import job, write_table\n")
+    assert private_imports(script) == []
+
+
+@pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.name)
+def test_workflow_scripts_start_with_the_shared_preamble(script):
+    # `with job(snakemake.log[0], ...)` is the script's one top-level block, and before
+    # it only the standard library and skinsuction.jobs are imported: the thread pools
+    # are sized before NumPy loads, and all output goes to the rule's log
+    body = ast.parse(script.read_text(encoding="utf-8")).body
+    blocks = [n for n in body if isinstance(n, ast.With)]
+    assert len(blocks) == 1, script.name
+    call = blocks[0].items[0].context_expr
+    assert isinstance(call, ast.Call) and getattr(call.func, "id", None) == "job", script.name
+    assert ast.unparse(call.args[0]) == "snakemake.log[0]", script.name
+    before = body[:body.index(blocks[0])]
+    for node in before:
+        if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant):
+            continue  # the docstring
+        assert isinstance(node, (ast.Import, ast.ImportFrom)), (script.name, ast.unparse(node))
+        module = node.module if isinstance(node, ast.ImportFrom) else node.names[0].name
+        assert module == "skinsuction.jobs" or module.split(".")[0] in {
+            "logging", "pathlib", "json", "sys"}, (script.name, module)
+    assert blocks[0] is body[-1], f"{script.name}: code after the job's block"
+
+
+def test_the_preamble_loads_no_numpy():
+    # skinsuction.jobs is imported before the thread pools are sized: NumPy must not be
+    import os
+    import subprocess
+    import sys
+
+    code = "import sys, skinsuction.jobs\nprint('numpy' in sys.modules)\n"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env={**os.environ, "PYTHONPATH": str(SRC)})
+    assert out.stdout.strip() == "False"

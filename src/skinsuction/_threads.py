@@ -12,6 +12,17 @@ _POOLS = (
 
 
 def limit_threads(threads):
-    """Set the thread-pool sizes; call before NumPy is imported to take effect."""
+    """Set the thread-pool sizes; call before NumPy is imported to take effect.
+
+    Parameters
+    ----------
+    threads : int
+        Threads of every pool (``OMP_NUM_THREADS``, ``OPENBLAS_NUM_THREADS``, ...).
+
+    Returns
+    -------
+    None
+        The pools are set in ``os.environ``, read by NumPy's BLAS when it loads.
+    """
     for name in _POOLS:
         os.environ[name] = str(threads)

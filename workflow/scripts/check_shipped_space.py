@@ -1,16 +1,10 @@
 """Rule check_shipped_space: the fresh scale-free space against the one shipped with skinsuction."""
 
-# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
-# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
-from skinsuction._threads import limit_threads
+from pathlib import Path
 
-limit_threads(snakemake.threads)
+from skinsuction.jobs import job
 
-from pathlib import Path  # noqa: E402
-
-from skinsuction.provenance import log_to_file  # noqa: E402
-
-with log_to_file(snakemake.log[0]):
+with job(snakemake.log[0], threads=snakemake.threads):
     from skinsuction.space import RaySpec, check_shipped_space, registry_from_config
 
     check_shipped_space(

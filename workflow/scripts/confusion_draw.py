@@ -1,15 +1,10 @@
 """Rule confusion_given_layers_draw: one virtual experiment, diagnosed (one row)."""
 
-from skinsuction._threads import limit_threads
+from skinsuction.jobs import job, write_table
 
-limit_threads(1)
-
-from skinsuction.provenance import log_to_file  # noqa: E402
-
-with log_to_file(snakemake.log[0]):
+with job(snakemake.log[0], threads=1):
     import pandas as pd
 
-    from skinsuction._files import write_table
     from skinsuction.diagnose import Settings
     from skinsuction.evaluation import domain_from_config, run_draw
     from skinsuction.space import OnDemandRays, read_ray_space

@@ -1,11 +1,10 @@
 """Rule confusion_given_layers: the draws' rows -> confusion matrix, rates, map."""
 
-from skinsuction.provenance import log_to_file
+from skinsuction.jobs import job, write_table
 
-with log_to_file(snakemake.log[0]):
+with job(snakemake.log[0]):
     import pandas as pd
 
-    from skinsuction._files import write_table
     from skinsuction.evaluation import summarise
     from skinsuction.figures.detectability import plot_detectability
 

@@ -1,22 +1,15 @@
 """Rule detectability_map: the diagnosis over the physiological domain (confusion, map)."""
 
-# One process per thread, each with single-threaded BLAS/OpenMP pools: set before
-# NumPy is imported (the Snakemake preamble does not import it; skinsuction's
-# __init__ is lazy).
-from skinsuction._threads import limit_threads
+from skinsuction.jobs import job, write_table
 
-limit_threads(1)
-
-from skinsuction.provenance import log_to_file  # noqa: E402
-
-with log_to_file(snakemake.log[0]):
+# one process per thread, each with single-threaded BLAS/OpenMP pools
+with job(snakemake.log[0], threads=1):
     import sys
 
     from skinsuction.diagnose import Settings
     from skinsuction.space import read_ray_space
     from skinsuction.evaluation import run_draws, summarise
     from skinsuction.figures.detectability import plot_detectability
-    from skinsuction._files import write_table
 
     spaces = {s.name: s for s in map(read_ray_space, snakemake.input.spaces)}
     settings = Settings.from_config(snakemake.params.decision, snakemake.params.fit)

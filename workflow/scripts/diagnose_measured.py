@@ -1,18 +1,12 @@
 """Rule diagnose_measured: `skinsuction diagnose` of one measured file of the config."""
 
-# One BLAS/OpenMP thread, before NumPy is imported (the Snakemake preamble does not
-# import it; skinsuction's __init__ is lazy): the job's threads are the processes
-# that solve rays on demand.
-from skinsuction._threads import limit_threads
+import logging
+from pathlib import Path
 
-limit_threads(1)
+from skinsuction.jobs import job
 
-import logging  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-from skinsuction.provenance import log_to_file  # noqa: E402
-
-with log_to_file(snakemake.log[0]):
+# one BLAS/OpenMP thread: the job's threads are the processes that solve rays on demand
+with job(snakemake.log[0], threads=1):
     from skinsuction.diagnose import Settings, diagnose_file, write_report
     from skinsuction.space import BASELINE, OnDemandRays, read_ray_space
 

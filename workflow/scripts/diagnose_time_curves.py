@@ -1,19 +1,12 @@
 """Rule diagnose_time_curves: `skinsuction diagnose` of one time-curve file of the config."""
 
-# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
-# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
-from skinsuction._threads import limit_threads
+import logging
+from pathlib import Path
 
-limit_threads(snakemake.threads)
+from skinsuction.jobs import job
 
-import logging  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-from skinsuction.provenance import log_to_file  # noqa: E402
-
-with log_to_file(snakemake.log[0]):
-    from skinsuction.diagnose import Settings
-    from skinsuction.diagnose._time import diagnose_time_file, write_time_report
+with job(snakemake.log[0], threads=snakemake.threads):
+    from skinsuction.diagnose import Settings, diagnose_time_file, write_time_report
 
     settings = Settings.from_config(snakemake.params.decision, snakemake.params.fit)
     report = diagnose_time_file(snakemake.input.measured,

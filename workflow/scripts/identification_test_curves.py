@@ -1,14 +1,8 @@
 """Rule identification_test_curves: FE and interpolated curves at the test point."""
 
-# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
-# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
-from skinsuction._threads import limit_threads
+from skinsuction.jobs import job
 
-limit_threads(snakemake.threads)
-
-from skinsuction.provenance import log_to_file  # noqa: E402
-
-with log_to_file(snakemake.log[0]):
+with job(snakemake.log[0], threads=snakemake.threads):
     from skinsuction.paper import make_test_curves
 
     t = snakemake.params.target

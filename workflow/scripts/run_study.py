@@ -1,17 +1,11 @@
 """Rule study: `skinsuction study` of one study of the config."""
 
-# BLAS/OpenMP pools sized to the job's threads, before NumPy is imported (the
-# Snakemake preamble does not import it; skinsuction's __init__ is lazy).
-from skinsuction._threads import limit_threads
+import logging
+from pathlib import Path
 
-limit_threads(snakemake.threads)
+from skinsuction.jobs import job
 
-import logging  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-from skinsuction.provenance import log_to_file  # noqa: E402
-
-with log_to_file(snakemake.log[0]):
+with job(snakemake.log[0], threads=snakemake.threads):
     import sys
 
     from skinsuction.cohort import run_study

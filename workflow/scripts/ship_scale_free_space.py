@@ -2,9 +2,9 @@
 
 from pathlib import Path
 
-from skinsuction.provenance import log_to_file
+from skinsuction.jobs import job
 
-with log_to_file(snakemake.log[0]):
+with job(snakemake.log[0]):
     from skinsuction.space import ship_space
 
     record = ship_space(
