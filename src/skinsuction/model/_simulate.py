@@ -4,76 +4,17 @@ import time
 
 import felupe as fem
 import numpy as np
-from scipy.sparse.linalg import splu
 
 from ._curve import Curve, ParameterError
-from ._fast import _SUPERLU_OPTIONS, FastAssembly, OrderedFactors, surface_edges
+from ._fast import FastAssembly, surface_edges
 from ._geometry import MeshSettings, suction_mesh
 from ._material import SkinLayers, bulk_modulus, thickness_stretch
 from ._probe import ProbeEdge
+from ._solver import NoEquilibrium, Stepping, TangentFactorizer, newton, reach
 from ._skin import BOTTOM_CONDITIONS, Probe, Ramp, Skin
 
 MBAR_TO_MPA = 1e-4
 DEFAULT_PRESSURES_MBAR = np.arange(0.0, 101.0, 2.0)
-
-
-def _factorize(K):
-    # MMD on A^T+A in symmetric mode: the tangent is symmetric in pattern and in
-    # value. SuperLU's default threshold (1.0) still swaps rows for any larger
-    # off-diagonal entry, which wrecks the symmetric ordering (3-4x the fill); the
-    # tangent of a stable equilibrium is positive definite, so diagonal pivots are
-    # kept unless one is below a tenth of its column's largest entry
-    return splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", options=_SUPERLU_OPTIONS)
-
-
-class TangentFactorizer:
-    """Factorises the tangents of one model, computing the fill-reducing order once.
-
-    SuperLU orders the matrix anew at every factorisation; for these tangents
-    (2-3 k DOFs) the minimum-degree ordering is about a sixth of it (8.4 -> 7.2 ms
-    on a 2 670-DOF ray tangent). The sparsity pattern of a model's tangent hardly
-    changes (the tangent at rest lacks a few entries), so the order SuperLU found
-    is kept and each later tangent is permuted symmetrically into it and
-    factorised in its natural order: the same fill and pivots. Any symmetric
-    permutation is a valid order, so a changed pattern costs fill, never
-    correctness; the order is recomputed when the number of entries changes.
-
-    Examples
-    --------
-    >>> import scipy.sparse as sp
-    >>> K = sp.diags([-1.0, 2.5, -1.0], [-1, 0, 1], shape=(6, 6)).tocsr()
-    >>> factorize = TangentFactorizer(np.arange(6))
-    >>> b = np.ones(6)
-    >>> x1, x2 = factorize(K).solve(b), factorize(K).solve(b)  # ordered, then reused
-    >>> bool(np.allclose(K @ x1, b) and np.allclose(K @ x2, b))
-    True
-    """
-
-    def __init__(self, free_dofs):
-        self.free = np.asarray(free_dofs)
-        self._rows = None  # free DOFs in the kept order
-        self._nnz = -1
-
-    def __call__(self, K):
-        K = K.tocsr()
-        if self._rows is not None:
-            A = K[self._rows][:, self._rows]
-            if A.nnz == self._nnz:
-                lu = splu(A.tocsc(), permc_spec="NATURAL", options=_SUPERLU_OPTIONS)
-                return OrderedFactors(lu, self._order)
-        A = K[self.free][:, self.free]  # in the model's own order: SuperLU orders it anew
-        lu = _factorize(A)
-        self._order = np.argsort(lu.perm_c)
-        self._rows, self._nnz = self.free[self._order], A.nnz
-        return lu
-
-
-class NoEquilibrium(RuntimeError):
-    """Newton's method found no equilibrium for one pressure increment."""
-
-    def __init__(self, message, iterations=0):
-        super().__init__(message)
-        self.iterations = iterations
 
 
 def _probe_mm(probe):
@@ -158,7 +99,6 @@ class SuctionTest:
                 f"the model takes a Skin (e.g. Skin.two_layer(x1d, x1h)), not {skin!r}")
         probe_mm = _probe_mm(probe)
         mesh = _mesh_settings(mesh)
-        fast_applies = _fast_applies(mesh)
         self.skin = skin
         self.layer_names = skin.names
         self.settings = mesh
@@ -168,28 +108,54 @@ class SuctionTest:
             self.parameters.update(skin.two_layer_values())
         except ParameterError:
             pass
-        bottom = skin.bottom
-        depth = skin.depth
         self.mesh, self.layer = suction_mesh(probe_mm, skin.thicknesses, mesh)
         a = probe_mm / 2
         # the skin is glued to the probe's face outside the rounded edge
-        a_glued = a * (1 + mesh.edge_radius)
+        self._a, self._a_glued = a, a * (1 + mesh.edge_radius)
         if mesh.probe_wall:
             # reference point of the rigid probe, outside every cell; it lies on
             # the glued face, so it is fixed with it
-            self.mesh.update(points=np.vstack([self.mesh.points, [0.0, a_glued]]))
-        z, r = self.mesh.points.T
-        tol = 1e-9 * (a + depth)
+            self.mesh.update(points=np.vstack([self.mesh.points, [0.0, self._a_glued]]))
+        self._tol = 1e-9 * (a + skin.depth)
 
         quadrature = fem.GaussLegendre(order=2 if mesh.quadrature == "full" else 1, dim=2)
         if mesh.element == "quad9":
             region = fem.RegionBiQuadraticQuad(self.mesh, quadrature=quadrature)
-            Boundary = fem.RegionBiQuadraticQuadBoundary
+            boundary_region = fem.RegionBiQuadraticQuadBoundary
         else:
             region = fem.RegionQuadraticQuad(self.mesh, quadrature=quadrature)
-            Boundary = fem.RegionQuadraticQuadBoundary
+            boundary_region = fem.RegionQuadraticQuadBoundary
         self.field = fem.FieldContainer([fem.FieldAxisymmetric(region, dim=2)])
+        umat, F0 = self._solid(poisson)
+        inside = self._suction(boundary_region)
+        self.items = [self.solid, self.suction]
+        self._wall = self._probe_wall(inside)
+        if self._wall is not None:
+            self.items.append(self._wall)
+        self._boundaries()
+        self.engine = mesh.engine
+        if self.engine == "auto":
+            self.engine = "fast" if _fast_applies(mesh) else "felupe"
+        self._pressure = 0.0  # FElupe's sign: suction is negative
+        if self.engine == "fast":
+            self.fast = FastAssembly(
+                region, umat.x1, umat.x2, umat.bulk,
+                None if F0 is None else np.asarray(F0),
+                surface_edges(self.mesh.cells, self.mesh.points, inside),
+                [] if self._wall is None else self._wall.points, self._a_glued,
+                self.dof1, self.mesh.npoints,
+                wall_center=None if self._wall is None else self._wall.centerpoint,
+            )
+            # the wall's penalty follows FElupe's: re-evaluated from the solid's
+            # last tangent at the first evaluation of each increment
+            self._wall_stale = True
+        else:
+            self._factorize = TangentFactorizer(self.dof1)
 
+    def _solid(self, poisson):
+        """The layers' body, per-cell parameters from the stack; the material and
+        the pre-deformation F0 (or None)."""
+        skin, mesh = self.skin, self.settings
         x1 = np.array([layer.X1 for layer in skin.layers])[self.layer]
         x2 = np.array([layer.X2 for layer in skin.layers])[self.layer]
         F0 = None
@@ -210,45 +176,55 @@ class SuctionTest:
         else:
             umat = SkinLayers(x1=x1, x2=x2, bulk=bulk_modulus(x1, poisson), prestretch=F0)
             self.solid = fem.SolidBody(umat, self.field)
+        return umat, F0
 
-        inside = np.isclose(z, 0, atol=tol) & (r <= a_glued + tol)
-        surface = Boundary(self.mesh, only_surface=True, mask=inside, ensure_3d=True)
+    def _suction(self, boundary_region):
+        """The follower pressure on the surface inside the aperture; its nodes' mask."""
+        z, r = self.mesh.points.T
+        inside = np.isclose(z, 0, atol=self._tol) & (r <= self._a_glued + self._tol)
+        surface = boundary_region(self.mesh, only_surface=True, mask=inside, ensure_3d=True)
         self.suction = fem.SolidBodyPressure(
             fem.FieldContainer([fem.FieldAxisymmetric(surface, dim=2)])
         )
+        return inside
 
-        self.items = [self.solid, self.suction]
-        if mesh.probe_wall:
-            # the skin inside the aperture cannot enter the probe: a frictionless
-            # rigid wall at r = a (penalty contact), inactive until a surface point
-            # is pulled outwards past the aperture edge
-            free_top = np.flatnonzero(inside & (r < a_glued - tol))
-            if mesh.edge_radius > 0:
-                wall = ProbeEdge(
-                    self.field, points=free_top, centerpoint=len(z) - 1,
-                    edge_radius=mesh.edge_radius * a,
-                    multiplier=mesh.wall_penalty, items=[self.solid],
-                )
-            else:
-                wall = fem.ContactRigidPlane(
-                    self.field, points=free_top, centerpoint=len(z) - 1,
-                    normal=[0.0, -1.0], multiplier=mesh.wall_penalty,
-                    items=[self.solid],
-                )
-            self.items.append(wall)
-        u = self.field[0]
+    def _probe_wall(self, inside):
+        """The skin inside the aperture cannot enter the probe: a frictionless rigid
+        wall at r = a (penalty contact), inactive until a surface point is pulled
+        outwards past the aperture edge; None without ``probe_wall``."""
+        mesh = self.settings
+        if not mesh.probe_wall:
+            return None
+        z, r = self.mesh.points.T
+        free_top = np.flatnonzero(inside & (r < self._a_glued - self._tol))
+        if mesh.edge_radius > 0:
+            return ProbeEdge(
+                self.field, points=free_top, centerpoint=len(z) - 1,
+                edge_radius=mesh.edge_radius * self._a,
+                multiplier=mesh.wall_penalty, items=[self.solid],
+            )
+        return fem.ContactRigidPlane(
+            self.field, points=free_top, centerpoint=len(z) - 1,
+            normal=[0.0, -1.0], multiplier=mesh.wall_penalty, items=[self.solid],
+        )
+
+    def _boundaries(self):
+        """Axis, glued face, bottom (by the skin's condition) and, for a pre-stretched
+        skin, the outer radius; the DOF partition and the apex node."""
+        z, r = self.mesh.points.T
+        tol, u = self._tol, self.field[0]
         boundaries = {
             "axis": fem.Boundary(u, mask=np.isclose(r, 0, atol=tol), skip=(1, 0)),
             "glued": fem.Boundary(
-                u, mask=np.isclose(z, 0, atol=tol) & (r >= a_glued - tol)
+                u, mask=np.isclose(z, 0, atol=tol) & (r >= self._a_glued - tol)
             ),
         }
-        bottom_nodes = np.isclose(z, -depth, atol=tol)
-        if bottom == "fixed":
+        bottom_nodes = np.isclose(z, -self.skin.depth, atol=tol)
+        if self.skin.bottom == "fixed":
             boundaries["bottom"] = fem.Boundary(u, mask=bottom_nodes)
-        elif bottom == "axial":
+        elif self.skin.bottom == "axial":
             boundaries["bottom"] = fem.Boundary(u, mask=bottom_nodes, skip=(0, 1))
-        if skin.has_prestretch:
+        if self.skin.has_prestretch:
             # the skin beyond the model holds the in-plane tension
             boundaries["outer"] = fem.Boundary(
                 u, mask=np.isclose(r, r.max(), atol=tol), skip=(1, 0)
@@ -258,25 +234,6 @@ class SuctionTest:
         self.ext0 = fem.dof.apply(self.field, boundaries, self.dof0)
         self.apex = int(np.flatnonzero(np.isclose(z, 0, atol=tol) & np.isclose(r, 0, atol=tol))[0])
         self.dofs = self.field[0].values.size
-        self.engine = mesh.engine
-        if self.engine == "auto":
-            self.engine = "fast" if fast_applies else "felupe"
-        self._pressure = 0.0  # FElupe's sign: suction is negative
-        self._wall = self.items[2] if mesh.probe_wall else None
-        if self.engine == "fast":
-            self.fast = FastAssembly(
-                region, umat.x1, umat.x2, umat.bulk,
-                None if F0 is None else np.asarray(F0),
-                surface_edges(self.mesh.cells, self.mesh.points, inside),
-                [] if self._wall is None else self._wall.points, a_glued,
-                self.dof1, self.mesh.npoints,
-                wall_center=None if self._wall is None else self._wall.centerpoint,
-            )
-            # the wall's penalty follows FElupe's: re-evaluated from the solid's
-            # last tangent at the first evaluation of each increment
-            self._wall_stale = True
-        else:
-            self._factorize = TangentFactorizer(self.dof1)
 
     def apex_deflection(self):
         """Current apex deflection (mm, positive into the probe)."""
@@ -350,76 +307,9 @@ class SuctionTest:
 
     def newton(self, lu, tol, maxiter, f, floor=0.0, xtol=1e-9, stall_after=8,
                stall_window=4):
-        """Newton's method at the current load, in place on the displacement field.
-
-        The factorised tangent ``lu`` (of an earlier increment, if given) serves
-        while it cuts the residual tenfold an iteration; otherwise, and from the
-        third iteration on, the tangent is refactorised (full Newton). A step
-        that inverts an element (non-finite residual) is halved before it is
-        accepted. An increment whose residual has not halved in ``stall_window``
-        iterations, after ``stall_after``, is given up (the caller cuts it back).
-
-        Parameters
-        ----------
-        lu : factors or None
-            A tangent to start with.
-        tol : float
-            Residual of the free DOFs relative to the reactions (floored by
-            ``floor``: a time step after a release, where both vanish).
-        maxiter : int
-            Iterations before :class:`NoEquilibrium` is raised.
-        f : ndarray
-            The residual of the current state.
-        floor : float
-            Smallest reaction norm the criterion divides by.
-        xtol : float
-            A correction below ``xtol`` of the displacement also ends it.
-        stall_after, stall_window : int
-            The stall rule above.
-
-        Returns
-        -------
-        (factors, int, ndarray)
-            The tangent in use, the iterations spent and the final residual.
-        """
-        u = self.field[0].values.reshape(-1)
-        history = []  # residual norms of this increment's iterations
-        for iteration in range(1, maxiter + 1):
-            if not np.all(np.isfinite(f)):
-                raise NoEquilibrium("an element is inverted", iteration - 1)
-            r1 = f[self.dof1]
-            norm_r1 = np.linalg.norm(r1)
-            if norm_r1 <= tol * max(np.linalg.norm(f[self.dof0]), floor):
-                return lu, iteration - 1, f
-            history.append(norm_r1)
-            # full Newton from the 3rd iteration on contracts a sound increment
-            # quadratically; one that has not halved its residual in 4 of them
-            # wanders (a limit point, an element about to invert): a smaller
-            # increment is cheaper than the rest of maxiter
-            if iteration > stall_after and norm_r1 > 0.5 * min(history[:-stall_window]):
-                raise NoEquilibrium(
-                    f"no contraction in {stall_window} iterations", iteration - 1
-                )
-            # an earlier tangent serves while it contracts the residual tenfold: a
-            # factorisation costs six modified iterations on the fast path, and a
-            # tangent that contracts less wastes more than it saves (measured:
-            # 1.7x less CPU over 28 rays than reuse while halving, to the 5th
-            # iteration)
-            if lu is None or iteration > 2 or (iteration > 1 and norm_r1 > 0.1 * history[-2]):
-                lu = self._tangent()
-            du = lu.solve(-r1)
-            u_start = u[self.dof1].copy()
-            for _ in range(6):
-                u[self.dof1] = u_start + du
-                f = self._residual()
-                if np.all(np.isfinite(f)):
-                    break
-                du *= 0.5
-            # when the loads are tiny against the moduli, the residual stalls at its
-            # round-off floor first: then a negligible correction means converged
-            if np.all(np.isfinite(f)) and np.linalg.norm(du) <= xtol * np.linalg.norm(u_start + du):
-                return lu, iteration, f
-        raise NoEquilibrium(f"no convergence in {maxiter} iterations", maxiter)
+        """Newton's method at the current load, in place (:func:`newton`, whose
+        parameters these are); returns the tangent, the iterations and the residual."""
+        return newton(self, lu, tol, maxiter, f, floor, xtol, stall_after, stall_window)
 
     def run(
         self,
@@ -468,88 +358,37 @@ class SuctionTest:
         deflection = np.full(p_out.shape, np.nan)
         deflection[0] = 0.0
 
-        u = self.field[0].values
-        u_now, u_before = u.copy(), u.copy()
-        p_now, dp_last = 0.0, 0.0
-        iterations, reason, lu = 0, "", None
         # increments grow to the widest spacing of the outputs (a curve refined
         # near 0 would otherwise creep on at its first, smallest step)
         nominal = float(np.max(np.diff(p_out))) if len(p_out) > 1 else 0.0
         if iteration_budget is None:
             iteration_budget = 20 * len(p_out)
-        dp = nominal
+        u = self.field[0].values
+        state = Stepping(u_now=u.copy(), u_before=u.copy(), dp=nominal, nominal=nominal)
+        rules = dict(tol=tol, maxiter=maxiter, min_increment_mbar=min_increment_mbar,
+                     iteration_budget=iteration_budget, stall_after=stall_after)
+        reason = ""
         for k, target in enumerate(p_out[1:], start=1):
-            while p_now < target - 1e-12:
-                if iterations > iteration_budget:
-                    reason = (
-                        f"no equilibrium above {p_now:g} mbar (iteration budget of "
-                        f"{iteration_budget} spent)"
-                    )
-                    break
-                remaining = target - p_now
-                if remaining <= 1e-6 * nominal:
-                    # round-off of the sum of cut-back increments: the equilibrium
-                    # is this pressure's to 1e-6 of an increment (a solve here would
-                    # also make the next increment start from this sliver)
-                    p_now = target
-                    break
-                clipped = remaining <= dp
-                step = remaining if clipped else dp
-                p_next = target if clipped else p_now + step
-                # linear extrapolation of the last converged increment, unless it
-                # inverts an element (then Newton starts from the last equilibrium)
-                scale = step / dp_last if dp_last > 0 else 0.0
-                u[:] = u_now + scale * (u_now - u_before)
-                self._set_pressure(p_next)
-                with np.errstate(all="ignore"):
-                    f = self._residual()
-                if not np.all(np.isfinite(f)):
-                    u[:], f = u_now, None
-                try:
-                    with np.errstate(all="ignore"):
-                        lu, used = self._equilibrium(p_next, lu, tol, maxiter, f=f,
-                                                     stall_after=stall_after)
-                    iterations += used
-                    if used > 2:
-                        # a hard increment: its last tangent would mislead the next
-                        lu = None
-                except (NoEquilibrium, RuntimeError, ValueError, np.linalg.LinAlgError) as err:
-                    # the budget counts the iterations spent, not the ones allowed
-                    iterations += getattr(err, "iterations", maxiter)
-                    lu, dp = None, step / 4
-                    if dp < min_increment_mbar:
-                        reason = (
-                            f"no equilibrium above {p_now:g} mbar (increment cut back "
-                            f"below {min_increment_mbar:g} mbar: {err})"
-                        )
-                        break
-                    continue
-                self._commit()
-                u_before, u_now = u_now, u.copy()
-                p_now, dp_last = p_next, step
-                # an increment cut short by an output pressure says nothing of the
-                # increment size: it stays (doubling from a sliver would creep)
-                if not clipped:
-                    dp = min(2 * dp, nominal)
+            reason = reach(self, float(target), state, **rules)
             if reason:
                 break
             deflection[k] = self.apex_deflection()
             if progress is not None:
                 progress(k, len(p_out) - 1, float(target))
 
-        u[:] = u_now
+        u[:] = state.u_now
         self._residual()  # leave the bodies' stored state at the last equilibrium
         converged = not reason
         if reason:
             reason += "; " + self.distortion_note(p_out, deflection)
-        last = p_now if converged else float(p_out[np.flatnonzero(np.isfinite(deflection))[-1]])
+        last = float(p_out[np.flatnonzero(np.isfinite(deflection))[-1]])
         return Curve(
             pressure_mbar=p_out,
             deflection_mm=deflection,
             converged=converged,
             last_converged_mbar=float(p_out[-1]) if converged else last,
             reason=reason,
-            newton_iterations=iterations,
+            newton_iterations=state.iterations,
             dofs=self.dofs,
             seconds=time.perf_counter() - start,
             info=dict(self.parameters, mesh=self.settings.to_dict(), engine=self.engine),

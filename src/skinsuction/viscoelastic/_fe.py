@@ -299,6 +299,24 @@ class ViscoelasticSuctionTest:
     def dofs(self):
         return self.model.dofs
 
+    def _predict(self, u_now, u_before, dt, h_last):
+        """Set the step's start: the extrapolation in time, unless the last
+        equilibrium has the smaller residual (after a switch of the load); returns
+        the residual there."""
+        m = self.model
+        u = m.field[0].values
+        with np.errstate(all="ignore"):
+            u[:] = u_now
+            f = m._residual()
+            if h_last > 0:
+                u[:] = u_now + (dt / h_last) * (u_now - u_before)
+                f_pred = m._residual()
+                if (np.all(np.isfinite(f_pred))
+                        and np.linalg.norm(f_pred[m.dof1]) < np.linalg.norm(f[m.dof1])):
+                    return f_pred
+                u[:] = u_now
+        return f
+
     def run(self, times_s, pressures_mbar, max_step_s=None, tol=1e-6, maxiter=25,
             min_step_fraction=1e-4, iteration_budget=None, progress=None):
         """Solve the pressure history ``p(t)``, piecewise linear between the given
@@ -327,14 +345,7 @@ class ViscoelasticSuctionTest:
         History
         """
         start = time.perf_counter()
-        t = np.asarray(times_s, dtype=float)
-        p = np.asarray(pressures_mbar, dtype=float)
-        if t.ndim != 1 or t.shape != p.shape or len(t) < 2:
-            raise ParameterError("times_s and pressures_mbar: two 1-D arrays of the same length >= 2")
-        if np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
-            raise ParameterError("times_s must increase strictly")
-        if p[0] != 0 or np.any(p < 0) or not np.all(np.isfinite(p)):
-            raise ParameterError("pressures_mbar must start at 0 and be finite and >= 0")
+        t, p = _history_arrays(times_s, pressures_mbar)
         if iteration_budget is None:
             iteration_budget = 40 * len(t)
         m, asm = self.model, self.assembly
@@ -360,19 +371,7 @@ class ViscoelasticSuctionTest:
                 p_next = p[k] if clipped else p[k - 1] + rate * (t_next - t[k - 1])
                 asm.begin_step(dt)
                 m._set_pressure(p_next)
-                # predictor: extrapolation in time, unless the last equilibrium
-                # has the smaller residual (after a switch of the load)
-                with np.errstate(all="ignore"):
-                    u[:] = u_now
-                    f = m._residual()
-                    if h_last > 0:
-                        u[:] = u_now + (dt / h_last) * (u_now - u_before)
-                        f_pred = m._residual()
-                        if (np.all(np.isfinite(f_pred))
-                                and np.linalg.norm(f_pred[m.dof1]) < np.linalg.norm(f[m.dof1])):
-                            f = f_pred
-                        else:
-                            u[:] = u_now
+                f = self._predict(u_now, u_before, dt, h_last)
                 try:
                     with np.errstate(all="ignore"):
                         lu, used, f = self.model.newton(lu, tol, maxiter, f, 1e-3 * peak)
@@ -409,6 +408,18 @@ class ViscoelasticSuctionTest:
             seconds=time.perf_counter() - start,
             info=dict(self.parameters, mesh=m.settings.to_dict(), engine="fast+viscous"),
         )
+
+
+def _history_arrays(times_s, pressures_mbar):
+    t = np.asarray(times_s, dtype=float)
+    p = np.asarray(pressures_mbar, dtype=float)
+    if t.ndim != 1 or t.shape != p.shape or len(t) < 2:
+        raise ParameterError("times_s and pressures_mbar: two 1-D arrays of the same length >= 2")
+    if np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
+        raise ParameterError("times_s must increase strictly")
+    if p[0] != 0 or np.any(p < 0) or not np.all(np.isfinite(p)):
+        raise ParameterError("pressures_mbar must start at 0 and be finite and >= 0")
+    return t, p
 
 
 def simulate_history(skin, times_s, pressures_mbar, probe=6.0, mesh=None, branches="full",
