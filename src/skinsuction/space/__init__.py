@@ -13,8 +13,9 @@ deflections at (candidates, pressures).
 
 Modules: ``_storage`` (point ids, curve files, Parquet with provenance),
 ``_solve`` (FE solves with fallback meshes), ``_grid`` (the grid layout's
-database), ``_interpolate`` (a grid of one probe, :class:`GriddedSpace`, and
-cubic Lagrange with its NaN policy), ``_causes`` (the cause coordinates of the
+database), ``_lagrange`` (local cubic Lagrange weights on one axis),
+``_interpolate`` (a grid of one probe, :class:`GriddedSpace`, interpolated with
+its NaN policy), ``_causes`` (the cause coordinates of the
 scale-free space), ``_rays``, ``_ray_solve`` and ``_ray_interpolate`` (the
 scale-free layout), ``_geometry`` (the spaces of one measurement at its probes and layer
 thicknesses, rays solved on demand), ``_open`` (either layout, per probe), ``_shipped`` (the
@@ -62,13 +63,8 @@ from ._grid import (
     grid_points,
     read_space,
 )
-from ._interpolate import (
-    GriddedSpace,
-    LagrangeAxis,
-    SpaceInterpolant,
-    evaluate,
-    interpolate_pressure,
-)
+from ._interpolate import GriddedSpace, SpaceInterpolant, evaluate, interpolate_pressure
+from ._lagrange import LagrangeAxis
 from ._open import LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
 from ._ray_solve import build_ray_spaces, compute_bundle, compute_ray

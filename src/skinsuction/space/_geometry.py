@@ -282,7 +282,7 @@ def _cause_effect(space, probe_mm: float):
     Interpolated across the cause's probes (cubic Lagrange in log10 of the
     aperture); exactly 0 at the neutral coordinate; None outside its probes.
     """
-    from ._interpolate import LagrangeAxis
+    from ._lagrange import LagrangeAxis
 
     probes = np.asarray(space.probes_mm, dtype=float)
     j0 = int(np.argmin(np.abs(np.asarray(space.coordinates) - space.cause.neutral)))

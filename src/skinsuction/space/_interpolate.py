@@ -40,11 +40,13 @@ candidates by stencil position and does one small matrix product per group.
 
 from __future__ import annotations
 
-import numpy as np
-
 from dataclasses import dataclass
 
-__all__ = ["GriddedSpace", "LagrangeAxis", "SpaceInterpolant", "interpolate_pressure", "evaluate"]
+import numpy as np
+
+from ._lagrange import LagrangeAxis
+
+__all__ = ["GriddedSpace", "SpaceInterpolant", "interpolate_pressure", "evaluate"]
 
 
 def _axis(name: str, values, min_size: int = 2) -> np.ndarray:
@@ -118,10 +120,21 @@ class GriddedSpace:
     def from_space(cls, space, probe_mm: float, **selection) -> "GriddedSpace":
         """Take the grid of one probe from a stored simulated space.
 
-        ``space`` is anything with a method
-        ``grid(probe_mm, **selection) -> (x1d, x1h, pressure_mbar, deflection_mm)``
-        (e.g. :class:`skinsuction.space.SimulatedSpace`); ``selection`` is passed on
-        (``bottom``, ``x2d``, ...).
+        Parameters
+        ----------
+        space : SimulatedSpace
+            Anything with a method ``grid(probe_mm, **selection) -> (x1d, x1h,
+            pressure_mbar, deflection_mm)`` (e.g.
+            :class:`skinsuction.space.SimulatedSpace`).
+        probe_mm : float
+            Aperture (probe) diameter in mm.
+        **selection
+            Passed on to ``space.grid`` (``bottom``, the other axes' values by
+            parameter path, ...).
+
+        Returns
+        -------
+        GriddedSpace
         """
         x1d, x1h, p, m = space.grid(probe_mm, **selection)
         return cls(x1d, x1h, p, m, probe_mm)
@@ -156,12 +169,28 @@ class GriddedSpace:
         return float(self.pressure_mbar[0]), float(self.pressure_mbar[-1])
 
     def range_note(self) -> str:
-        """What sets :attr:`pressure_range`, for error messages."""
+        """What sets :attr:`pressure_range`, for error messages.
+
+        Returns
+        -------
+        str
+        """
         return "the pressures of the simulated grid"
 
     def interpolant_at(self, pressure_mbar, nan_policy: str = "shift"):
         """Omega_s at fixed pressures: a callable ``(N, 2) candidates -> (N, u) mm``
         with ``lower`` and ``upper`` (:class:`skinsuction.space.SpaceInterpolant`).
+
+        Parameters
+        ----------
+        pressure_mbar : array_like, shape (u,)
+            Strictly increasing pressures inside the grid's (e.g. a measured curve's).
+        nan_policy : {"shift", "strict"}
+            How stencils with non-converged nodes are handled (module docstring).
+
+        Returns
+        -------
+        SpaceInterpolant
 
         Examples
         --------
@@ -174,107 +203,22 @@ class GriddedSpace:
 
     @staticmethod
     def to_moduli(candidates) -> np.ndarray:
-        """(N, 2) X1d, X1h in MPa of candidates (the grid's candidates are the moduli)."""
-        return np.atleast_2d(np.asarray(candidates, dtype=float))
+        """(N, 2) X1d, X1h in MPa of candidates (the grid's candidates are the moduli).
 
-    from_moduli = to_moduli
+        Also :meth:`from_moduli` (the same map: the identity).
 
-
-def _numerators(d: np.ndarray) -> np.ndarray:
-    """Lagrange numerators ``prod_{j != k} d_j`` for each k, rows of ``d`` (N, m)."""
-    m = d.shape[1]
-    if m == 4:  # by pairs: 8 products instead of 12
-        d0, d1, d2, d3 = d.T
-        p01, p23 = d0 * d1, d2 * d3
-        return np.stack([d1 * p23, d0 * p23, p01 * d3, p01 * d2], axis=1)
-    return np.stack([np.prod(np.delete(d, k, axis=1), axis=1) for k in range(m)], axis=1)
-
-
-def _cubic_weights(x, start, columns) -> np.ndarray:
-    """Cubic Lagrange weights (N, 4) of the stencils ``start``, as `_numerators` then
-    division by the denominators, in the same operations (bit for bit), by columns."""
-    d0, d1, d2, d3 = (x - c.take(start) for c in columns[:4])
-    p01, p23 = d0 * d1, d2 * d3
-    w = np.empty((4, x.size))
-    for k, (a, b) in enumerate(((d1, p23), (d0, p23), (p01, d3), (p01, d2))):
-        np.multiply(a, b, out=w[k])
-        np.divide(w[k], columns[4 + k].take(start), out=w[k])
-    return w.T
-
-
-class LagrangeAxis:
-    """Local cubic Lagrange weights on one grid axis.
-
-    Parameters
-    ----------
-    nodes : array_like, shape (n,)
-        Strictly increasing grid nodes.  With fewer than 4 nodes the stencil has
-        ``n`` nodes (linear for 2, quadratic for 3).
-
-    Examples
-    --------
-    >>> ax = LagrangeAxis([0.0, 1.0, 2.0, 3.0, 4.0])
-    >>> start, w = ax.weights([1.0, 2.5])
-    >>> start.tolist()
-    [0, 1]
-    >>> (w.round(4) + 0.0).tolist()
-    [[0.0, 1.0, 0.0, 0.0], [-0.0625, 0.5625, 0.5625, -0.0625]]
-    """
-
-    def __init__(self, nodes):
-        nodes = np.asarray(nodes, dtype=float)
-        if nodes.ndim != 1 or nodes.size < 2 or not np.all(np.diff(nodes) > 0):
-            raise ValueError("nodes must be 1-D, strictly increasing, with >= 2 values")
-        self.nodes = nodes
-        self.m = min(4, nodes.size)
-        self.n_starts = nodes.size - self.m + 1
-        offsets = np.arange(self.m)
-        self._offsets = offsets
-        stencils = nodes[np.arange(self.n_starts)[:, None] + offsets]  # (n_starts, m)
-        # denominators: the numerator formula at x = node k (same rounding, so
-        # the weights are exactly 1 and 0 at the nodes)
-        denom = np.empty((self.n_starts, self.m))
-        for k in range(self.m):
-            denom[:, k] = _numerators(stencils[:, k : k + 1] - stencils)[:, k]
-        # one gather per call: stencil nodes and denominators side by side
-        self._table = np.concatenate([stencils, denom], axis=1)  # (n_starts, 2m)
-        # searchsorted(side="right") r in 0..n  ->  stencil start
-        # (cell r - 1, stencil from cell - 1, shifted inwards at the ends)
-        r = np.arange(nodes.size + 1)
-        self._start_of = np.clip(r - 1 - (self.m // 2 - 1), 0, self.n_starts - 1)
-        # the same table by columns: for many points, gathering 1-D columns and
-        # writing weights row by row of a (m, N) array is twice as fast
-        self._columns = [np.ascontiguousarray(c) for c in self._table.T]
-
-    def weights(self, x):
-        """Stencil start index and Lagrange weights for the points ``x``.
+        Parameters
+        ----------
+        candidates : array_like, shape (N, 2) or (2,)
+            Candidates (X1d, X1h) in MPa.
 
         Returns
         -------
-        start : ndarray of int, shape (N,)
-            Index of the first stencil node; the stencil is ``start + arange(m)``.
-        weights : ndarray, shape (N, m)
-            Weights of the stencil nodes; NaN rows for points outside the nodes.
+        ndarray, shape (N, 2)
         """
-        x = np.asarray(x, dtype=float).reshape(-1)
-        r = np.searchsorted(self.nodes, x, side="right")
-        start = self._start_of[r]
-        w = self.weights_at(x, start)
-        outside = (r == 0) | ~(x <= self.nodes[-1])  # NaN is outside too
-        if outside.any():
-            w[outside] = np.nan
-        return start, w
+        return np.atleast_2d(np.asarray(candidates, dtype=float))
 
-    def weights_at(self, x, start) -> np.ndarray:
-        """Weights (N, m) of the points ``x`` on the stencils starting at ``start``
-        (centred or not; no check that x lies inside them)."""
-        x = np.asarray(x, dtype=float).reshape(-1)
-        if self.m == 4:
-            return _cubic_weights(x, start, self._columns)
-        table = self._table[start]  # (N, 2m)
-        w = _numerators(x[:, None] - table[:, :self.m])
-        w /= table[:, self.m:]
-        return w
+    from_moduli = to_moduli
 
 
 def interpolate_pressure(space: GriddedSpace, pressure_mbar) -> GriddedSpace:
@@ -422,10 +366,22 @@ class SpaceInterpolant:
         return self.space.upper
 
     def __call__(self, candidates, out=None) -> np.ndarray:
-        """Interpolated curves, shape (N, u), for candidates (N, 2) = (X1d, X1h).
+        """Interpolated curves for candidates (X1d, X1h).
 
-        ``out`` (N, u), optional, receives the result (saves allocating a large
-        array per call).  Not thread-safe: one interpolant per thread.
+        Not thread-safe: one interpolant per thread.
+
+        Parameters
+        ----------
+        candidates : array_like, shape (N, 2)
+            Candidates (X1d, X1h) in MPa.
+        out : ndarray, shape (N, u), optional
+            Receives the result (saves allocating a large array per call).
+
+        Returns
+        -------
+        ndarray, shape (N, u)
+            Deflections (mm) at the space's pressures; NaN outside the grid or
+            where no NaN-free stencil holds the candidate's cell.
         """
         x = np.asarray(candidates, dtype=float)
         if x.ndim != 2 or x.shape[1] != 2:
@@ -491,10 +447,23 @@ class SpaceInterpolant:
 
 
 def evaluate(space: GriddedSpace, candidates, pressure_mbar=None) -> np.ndarray:
-    """Omega_s for candidates (N, 2) at ``pressure_mbar`` (default: the space's), (N, u).
+    """Omega_s for candidates at some pressures, once.
 
     Convenience for one-off use; an identification builds the
     :class:`SpaceInterpolant` once instead.
+
+    Parameters
+    ----------
+    space : GriddedSpace
+    candidates : array_like, shape (N, 2)
+        Candidates (X1d, X1h) in MPa.
+    pressure_mbar : array_like, shape (u,), optional
+        Pressures (mbar); default: the space's.
+
+    Returns
+    -------
+    ndarray, shape (N, u)
+        Deflections (mm).
 
     Examples
     --------

@@ -14,7 +14,8 @@ import math
 
 import numpy as np
 
-from ._interpolate import GriddedSpace, LagrangeAxis, SpaceInterpolant
+from ._interpolate import GriddedSpace, SpaceInterpolant
+from ._lagrange import LagrangeAxis
 from ._rays import RaySpace
 
 __all__ = ["RayInterpolant", "NeoHookeanSlice", "TabulatedInterpolant"]
@@ -129,11 +130,22 @@ class RayInterpolant:
         return out
 
     def combined_rays(self, theta) -> np.ndarray:
-        """The rays at (r, c) of the candidates on the ray pressures, (N, n_p), mm.
+        """The rays at (r, c) of the candidates, on the rays' own pressures.
 
         NaN policy "shift" (as the identification's): where the centred stencil
         holds a ray that stopped early, the other stencils that still contain the
         candidate's cell are tried in turn, pressure by pressure.
+
+        Parameters
+        ----------
+        theta : array_like, shape (N, d)
+            Candidates ``(log10 X1d, log10 r[, u])`` (X1d is not used here).
+
+        Returns
+        -------
+        ndarray, shape (N, n_p)
+            Deflections (mm) at the pressures of the FE runs (``spec.pressures_mbar``),
+            0 at p = 0; NaN outside the rays or beyond their reach.
         """
         theta = np.asarray(theta, dtype=float)
         n = theta.shape[0]
@@ -170,6 +182,20 @@ class RayInterpolant:
         return out
 
     def __call__(self, theta, out=None) -> np.ndarray:
+        """The deflections of candidates at the measured pressures.
+
+        Parameters
+        ----------
+        theta : array_like, shape (N, d) or (d,)
+            Candidates ``(log10 X1d, log10 r[, u])``.
+        out : ndarray, shape (N, u), optional
+            Receives the result.
+
+        Returns
+        -------
+        ndarray, shape (N, u)
+            Deflections (mm); NaN outside the space or beyond the reach of a ray.
+        """
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         if theta.shape[1] != self.d:
             raise ValueError(f"candidates must have {self.d} columns, got {theta.shape}")
@@ -250,7 +276,12 @@ class NeoHookeanSlice:
         return 0.0, float(self.space.spec.reach_mbar())
 
     def range_note(self) -> str:
-        """What sets :attr:`pressure_range`, for error messages."""
+        """What sets :attr:`pressure_range`, for error messages.
+
+        Returns
+        -------
+        str
+        """
         sp = self.space.spec
         return (f"the reach of the scale-free space: p/X1d <= {sp.load_max:g} mbar/MPa "
                 f"up to X1d = {sp.x1d_range[1]:g} MPa")
@@ -258,7 +289,17 @@ class NeoHookeanSlice:
     def interpolant_at(self, pressure_mbar, nan_policy: str = "shift") -> "TabulatedInterpolant":
         """The space at fixed pressures (candidates theta), tabulated once per protocol.
 
-        Only the NaN policy "shift" is implemented for the scale-free layout.
+        Parameters
+        ----------
+        pressure_mbar : array_like, shape (u,)
+            The measured pressures (mbar).
+        nan_policy : {"shift"}
+            Only the NaN policy "shift" is implemented for the scale-free layout.
+
+        Returns
+        -------
+        TabulatedInterpolant
+            Shared by every call with the same pressures (the last 16 protocols).
         """
         if nan_policy != "shift":
             raise ValueError(f"nan_policy {nan_policy!r}: the scale-free space uses 'shift'")
@@ -274,14 +315,35 @@ class NeoHookeanSlice:
 
     @staticmethod
     def to_moduli(theta) -> np.ndarray:
-        """(N, 2) X1d, X1h in MPa of candidates theta."""
+        """X1d, X1h in MPa of candidates theta.
+
+        Parameters
+        ----------
+        theta : array_like, shape (N, 2) or (2,)
+            Candidates ``(log10 X1d, log10 X1h/X1d)``.
+
+        Returns
+        -------
+        ndarray, shape (N, 2)
+        """
         t = np.atleast_2d(np.asarray(theta, dtype=float))
         x1d = 10.0 ** t[:, 0]
         return np.stack([x1d, x1d * 10.0 ** t[:, 1]], axis=1)
 
     @staticmethod
     def from_moduli(x) -> np.ndarray:
-        """Candidates theta of (N, 2) moduli X1d, X1h in MPa."""
+        """Candidates theta of moduli (inverse of :meth:`to_moduli`).
+
+        Parameters
+        ----------
+        x : array_like, shape (N, 2) or (2,)
+            X1d, X1h in MPa.
+
+        Returns
+        -------
+        ndarray, shape (N, 2)
+            ``(log10 X1d, log10 X1h/X1d)``.
+        """
         x = np.atleast_2d(np.asarray(x, dtype=float))
         return np.stack([np.log10(x[:, 0]), np.log10(x[:, 1] / x[:, 0])], axis=1)
 
@@ -330,6 +392,20 @@ class TabulatedInterpolant:
         self._buffer = np.empty((0, int(self._pos.sum())))
 
     def __call__(self, candidates, out=None) -> np.ndarray:
+        """The deflections of candidates at the tabulated pressures.
+
+        Parameters
+        ----------
+        candidates : array_like, shape (N, 2) or (2,)
+            Candidates ``(log10 X1d, log10 X1h/X1d)``.
+        out : ndarray, shape (N, u), optional
+            Receives the result.
+
+        Returns
+        -------
+        ndarray, shape (N, u)
+            Deflections (mm), 0 at p = 0.
+        """
         cand = np.atleast_2d(np.asarray(candidates, dtype=float))
         n = cand.shape[0]
         if out is None:
