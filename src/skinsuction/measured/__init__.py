@@ -69,6 +69,10 @@ Unit and plausibility rules, per curve (a Cutometer applies at most about
   pressure (noise makes only small falls; a small 2 mm curve of stiff skin with 5 µm
   of noise falls by 20-25 µm, a smooth falling curve has little noise).
 
+Either kind of file, read once, the kind decided by its header (a ``time_s``
+column): :func:`read_measurement`.  Checks against a space learnt after reading
+(its reach depends on the file's layers): :func:`check_against_space`.
+
 Time curves (Cutometer mode 1 and mode 2, columns ``probe_mm, time_s, pressure_mbar,
 deflection_mm``) are read by :func:`load_time_curves`, which finds the phases of the
 suction, the deflection's resolution and the noise; :func:`r_parameters` gives the
@@ -106,7 +110,8 @@ from ._checks import (
     UM_ABOVE_MM,
 )
 from ._geometry import DEFAULT_LAYERS_MM, GEOMETRY_KEYS, Geometry, check_geometry_metadata, geometry_of
-from ._load import StudyEntry, load_measured, load_table
+from ._load import StudyEntry, check_against_space, load_measured, load_table
+from ._read import read_measurement
 from ._rparams import R_COLUMNS, RAMP_COLUMNS, r_parameters, ramp_parameters
 from ._timecurve import (
     DEVICE_MAX_MBAR,
@@ -138,7 +143,7 @@ del _cls
 
 __all__ = [
     "MeasuredDataError", "MeasuredCurve", "MeasuredData", "load_measured", "StudyEntry",
-    "load_table", "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS", "MAX_POINTS_PER_CURVE",
+    "load_table", "read_measurement", "check_against_space", "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS", "MAX_POINTS_PER_CURVE",
     "MAX_ROWS_PER_FILE", "MAX_FILE_BYTES", "PA_ABOVE_MBAR", "BAR_AT_MOST_MBAR", "UM_ABOVE_MM",
     "M_BELOW_MM", "APERTURE_LIMIT", "APERTURE_FLOOR", "LOW_PRESSURE_MBAR",
     "GEOMETRY_KEYS", "Geometry", "DEFAULT_LAYERS_MM", "check_geometry_metadata", "geometry_of",

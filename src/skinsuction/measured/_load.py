@@ -24,7 +24,7 @@ from ._types import (
     _show,
 )
 
-__all__ = ["load_measured", "StudyEntry", "load_table"]
+__all__ = ["load_measured", "check_against_space", "StudyEntry", "load_table"]
 
 
 _NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
@@ -239,10 +239,57 @@ def _load_text(path, text, line_numbers, available_probes=None, pressure_range_m
             deflection_mm=np.array(rows.deflection),
             curve=rows.curve,
             first_line=rows.lines[0],
+            lines=tuple(rows.lines),
         )
         for rows in groups.values()
     )
     return MeasuredData(str(path), curves, metadata, tuple(comments), tuple(warnings))
+
+
+def check_against_space(data: MeasuredData, *, available_probes=None, pressure_range_mbar=None,
+                        range_note: str | None = None) -> MeasuredData:
+    """Check loaded curves against a simulated space, as :func:`load_measured` does.
+
+    A caller that learns the space's probes or reach only after reading the file
+    (the reach depends on the layers the file gives) checks the loaded data
+    instead of reading the file again; the message names the same line and column.
+
+    Parameters
+    ----------
+    data : MeasuredData
+        As loaded (its curves know the line of each point).
+    available_probes : iterable of float, optional
+        Probe diameters (mm) held by the space; other probes are rejected.
+    pressure_range_mbar : (float, float), optional
+        Pressure range of the space; pressures outside are rejected.
+    range_note : str, optional
+        What sets that range, for the error.
+
+    Returns
+    -------
+    MeasuredData
+        ``data`` itself.
+
+    Raises
+    ------
+    MeasuredDataError
+        For the first curve outside the space, naming the file, line and column.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "m.csv"
+    >>> _ = path.write_text("probe_mm,pressure_mbar,deflection_mm\\n6,0,0\\n6,150,0.8\\n")
+    >>> check_against_space(load_measured(path), pressure_range_mbar=(0, 100))
+    Traceback (most recent call last):
+    ...
+    skinsuction.measured.MeasuredDataError: ...m.csv, line 3, column 'pressure_mbar': pressure 150 mbar is outside the simulated range 0..100 mbar
+    """
+    for c in data.curves:
+        lines = list(c.lines) if len(c.lines) == len(c) else [c.first_line or None] * len(c)
+        rows = _Rows(c.probe_mm, c.curve, lines, list(c.pressure_mbar), list(c.deflection_mm))
+        _check_space(data.path, rows, available_probes, pressure_range_mbar, range_note)
+    return data
 
 
 @dataclass(frozen=True, eq=False)
@@ -298,6 +345,12 @@ def load_table(path, *, ids=None, available_probes=None, pressure_range_mbar=Non
         text = _read_text(path)
     except MeasuredDataError as err:
         return [StudyEntry(dict(ids or {}), None, str(err), str(path))]
+    return _table_entries(path, text, ids, available_probes, pressure_range_mbar, range_note)
+
+
+def _table_entries(path, text, ids=None, available_probes=None, pressure_range_mbar=None,
+                   range_note=None) -> list:
+    """The entries of :func:`load_table` from the text of the file, already read."""
     lines = _lines(text)
     header, comments = None, []
     for lineno, line in enumerate(lines, start=1):

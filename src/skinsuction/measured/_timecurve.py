@@ -300,7 +300,13 @@ def is_time_curve_file(path) -> bool:
             head = f.read(1 << 16)
     except OSError:
         return False
-    for line in _lines(head.decode("utf-8-sig", errors="replace")):
+    return _has_time_column(head.decode("utf-8-sig", errors="replace"))
+
+
+def _has_time_column(text: str) -> bool:
+    """The one rule telling the formats apart: the header line has a ``time_s`` column
+    (used by :func:`is_time_curve_file` and :func:`skinsuction.measured.read_measurement`)."""
+    for line in _lines(text):
         stripped = line.strip()
         if stripped and not stripped.startswith("#"):
             return "time_s" in _split(stripped)
@@ -335,8 +341,9 @@ def load_time_curves(path: str | os.PathLike) -> MeasuredTimeData:
         raise
 
 
-def _load(path) -> MeasuredTimeData:
-    text = _read_text(path)
+def _load(path, text=None) -> MeasuredTimeData:
+    """The time curves of a file; ``text``: its content if already read."""
+    text = _read_text(path) if text is None else text
     comments, metadata, meta_lines, header, groups = [], {}, {}, None, {}
     lines = _lines(text)
     for lineno, line in enumerate(lines, start=1):

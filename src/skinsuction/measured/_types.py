@@ -62,6 +62,9 @@ class MeasuredCurve:
         Replicate id ('' when the file has no ``curve`` column).
     first_line : int
         Line of the file where the curve starts.
+    lines : tuple of int
+        The file's line of each point (empty for curves built in memory), so that a
+        check of loaded data against a space names the line as the loader does.
     """
 
     probe_mm: float
@@ -69,6 +72,7 @@ class MeasuredCurve:
     deflection_mm: np.ndarray
     curve: str = ""
     first_line: int = 0
+    lines: tuple = ()
 
     def __len__(self) -> int:
         return int(self.pressure_mbar.size)
