@@ -739,6 +739,10 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
                   on_demand=None, workers: int = 1) -> dict:
     """Read a measured CSV (as ``skinsuction identify`` does) and diagnose it.
 
+    ``measured_path`` may be the file's curves as read
+    (:func:`skinsuction.measured.read_measurement`): checked against the spaces,
+    not read again.
+
     ``space_dir``: the scale-free space; by default the workflow's build in
     ``results/simulated_space/scale_free`` of the working directory if there is
     one, else the default space shipped with skinsuction
@@ -749,7 +753,7 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
     probe or layers the spaces lack, or None to solve them (``workers`` processes).
     """
     from skinsuction._files import file_sha256
-    from skinsuction.measured import geometry_of, load_measured
+    from skinsuction.measured import MeasuredData, check_against_space, geometry_of, load_measured
 
     from skinsuction.space import OnDemandRays, read_ray_spaces, resolve_space
 
@@ -762,13 +766,15 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
         spaces = read_ray_spaces(space_dir)
     base = spaces[BASELINE]
     sp = base.spec
-    data = load_measured(measured_path, available_probes=None if on_demand is not False
-                         else list(base.probes_mm),
-                         pressure_range_mbar=(0.0, sp.reach_mbar()),
-                         range_note=(f"the reach of the scale-free space: p/X1d <= "
-                                     f"{sp.load_max:g} mbar/MPa up to X1d = "
-                                     f"{sp.x1d_range[1]:g} MPa"))
-    source = {"file": str(measured_path), "sha256": file_sha256(measured_path),
+    data = (measured_path if isinstance(measured_path, MeasuredData)
+            else load_measured(measured_path))
+    check_against_space(data, available_probes=None if on_demand is not False
+                        else list(base.probes_mm),
+                        pressure_range_mbar=(0.0, sp.reach_mbar()),
+                        range_note=(f"the reach of the scale-free space: p/X1d <= "
+                                    f"{sp.load_max:g} mbar/MPa up to X1d = "
+                                    f"{sp.x1d_range[1]:g} MPa"))
+    source = {"file": data.path, "sha256": file_sha256(data.path),
               "space_dir": str(space_dir) if space_dir is not None else None,
               "space": space_info}
     geometry, warnings = geometry_of(data, **(thickness or {}))

@@ -205,18 +205,20 @@ def time_summary_text(report: dict) -> str:
 
 def diagnose_time_file(path, space_path=None, settings: Settings | None = None, *,
                        thickness=None, solve_on_demand=True, workers: int = 1) -> dict:
-    """:func:`diagnose_time_data` of a file, with the default space if none is given."""
+    """:func:`diagnose_time_data` of a file, with the default space if none is given;
+    ``path`` may be the file's curves as read
+    (:func:`skinsuction.measured.read_measurement`): not read again."""
     from skinsuction._files import file_sha256
-    from skinsuction.measured import load_time_curves
+    from skinsuction.measured import MeasuredTimeData, load_time_curves
     from skinsuction.space import load_space
 
-    data = load_time_curves(path)
+    data = path if isinstance(path, MeasuredTimeData) else load_time_curves(path)
     space = load_space(space_path, solve_on_demand=solve_on_demand, workers=workers)
     if space.rays is None:
         raise InputError(f"{space.info['path']}: time curves need the scale-free space (its "
                          "neo-Hookean rays), not a grid database")
     report = diagnose_time_data(data, space, settings, thickness=thickness)
-    report["input"]["sha256"] = file_sha256(path)
+    report["input"]["sha256"] = file_sha256(data.path)
     report["input"]["space"] = space.info
     return report
 

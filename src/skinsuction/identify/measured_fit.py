@@ -108,8 +108,8 @@ def identify_measured(
 
     Parameters
     ----------
-    measured_path : path-like
-        Measured CSV (format: :mod:`skinsuction.measured`).
+    measured_path : path-like or MeasuredData
+        Measured CSV (format: :mod:`skinsuction.measured`), or its curves already read.
     space_path : path-like, optional
         The scale-free space (its directory or its ``neo_hookean.parquet``), or a
         grid database such as the paper's (``results/simulated_space/paper.parquet``).
@@ -164,27 +164,26 @@ def identify_measured(
         and X1h, their correlation; None with a warning if the noise cannot be
         estimated).
     """
-    from skinsuction.measured import load_measured
-
-    from skinsuction.measured import geometry_of
+    from skinsuction.measured import MeasuredData, check_against_space, geometry_of, load_measured
 
     _check_settings(alpha, repeats, seed, noise_um, level)
     space = (load_space(space_path, bottom, solve_on_demand=solve_on_demand, workers=workers)
              if spaces is None else LoadedSpace.given(spaces))
-    data = load_measured(measured_path, available_probes=space.available_probes)
+    data = measured_path if isinstance(measured_path, MeasuredData) else load_measured(measured_path)
+    check_against_space(data, available_probes=space.available_probes)
     geometry, geometry_warnings = geometry_of(data, **(thickness or {}))
     space = space.at(geometry)
     probes_needed = space.check_probes(_probes_of(objective, probe_mm, data.probes))
-    # the pressures against the space's reach, with the loader's located message
-    load_measured(measured_path, available_probes=space.available_probes,
-                  pressure_range_mbar=space.pressure_range(probes_needed),
-                  range_note=space.range_note(probes_needed))
+    # the pressures against the space's reach, known once the layers are
+    check_against_space(data, available_probes=space.available_probes,
+                        pressure_range_mbar=space.pressure_range(probes_needed),
+                        range_note=space.range_note(probes_needed))
     result = identify_data(data, space, objective=objective, probe_mm=probe_mm, alpha=alpha,
                            repeats=repeats, seed=seed, curve=curve,
                            window_focusing=window_focusing, noise_um=noise_um, level=level,
                            geometry=geometry)
     result["warnings"] = geometry_warnings + result["warnings"]
-    result["input"]["sha256"] = file_sha256(measured_path)
+    result["input"]["sha256"] = file_sha256(data.path)
     return result
 
 

@@ -60,17 +60,18 @@ def _check(terms, repeats, seed, noise_um, level, phases):
 def identify_time_file(path, space_path=None, *, thickness=None, solve_on_demand=True,
                        workers=1, **options) -> dict:
     """:func:`identify_time_data` of a file (the space read from ``space_path``, the
-    default one if None); ``input.sha256`` filled in."""
-    from skinsuction.measured import load_time_curves
+    default one if None); ``input.sha256`` filled in.  ``path`` may be the file's
+    curves as read (:func:`skinsuction.measured.read_measurement`): not read again."""
+    from skinsuction.measured import MeasuredTimeData, load_time_curves
     from skinsuction.space import load_space
 
-    data = load_time_curves(path)
+    data = path if isinstance(path, MeasuredTimeData) else load_time_curves(path)
     space = load_space(space_path, solve_on_demand=solve_on_demand, workers=workers)
     if space.rays is None:
         raise InputError(f"{space.info['path']}: time curves need the scale-free space (its "
                          "neo-Hookean rays), not a grid database")
     result = identify_time_data(data, space, thickness=thickness, **options)
-    result["input"]["sha256"] = file_sha256(path)
+    result["input"]["sha256"] = file_sha256(data.path)
     return result
 
 
