@@ -81,8 +81,6 @@ def discover(path, *, available_probes=None, pressure_range_mbar=None, range_not
     manifest excluded) or one CSV.  Each entry's ids include ``file`` (the path
     relative to the folder).
     """
-    from skinsuction.measured import load_table
-
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no such study folder or file")
@@ -93,33 +91,34 @@ def discover(path, *, available_probes=None, pressure_range_mbar=None, range_not
             raise ValueError(f"{path}: no .csv files in the study folder")
     else:
         manifest, files = {}, [path]
-    from skinsuction.measured import is_time_curve_file
+    from skinsuction.measured import MeasuredDataError, StudyEntry, read_measurement
 
     out = []
     for f in files:
         rel = f.relative_to(path).as_posix() if path.is_dir() else f.name
         ids = {"file": rel, **manifest.get(rel, manifest.get(f.name, {}))}
         sha = _sha256(f)
-        if is_time_curve_file(f):
-            out.append((_time_entry(f, ids), sha))
+        try:  # a ramp table's bad measurement is an entry; a bad time file raises
+            loaded = read_measurement(f, table=True, ids=ids, available_probes=available_probes,
+                                      pressure_range_mbar=pressure_range_mbar,
+                                      range_note=range_note)
+        except MeasuredDataError as err:
+            out.append((StudyEntry(dict(ids), None, str(err), str(f)), sha))
             continue
-        for entry in load_table(f, ids=ids, available_probes=available_probes,
-                                pressure_range_mbar=pressure_range_mbar, range_note=range_note):
-            out.append((entry, sha))
+        if isinstance(loaded, list):
+            out += [(entry, sha) for entry in loaded]
+        else:
+            out.append((_time_entry(f, ids, loaded), sha))
     return out
 
 
-def _time_entry(path, ids):
+def _time_entry(path, ids, data):
     """A time-curve file as one measurement (its ``# key: value`` lines are ids); a
     file of several subjects in one long table with ``time_s`` is not read (yet)."""
-    from skinsuction.measured import MeasuredDataError, StudyEntry, load_time_curves
+    from skinsuction.measured import StudyEntry
     from skinsuction.measured._geometry import SD_KEYS
 
     geometry_keys = set(SD_KEYS) | set(SD_KEYS.values())
-    try:
-        data = load_time_curves(path)
-    except MeasuredDataError as err:
-        return StudyEntry(dict(ids), None, str(err), str(path))
     meta = {k: v for k, v in data.metadata.items() if k not in geometry_keys}
     return StudyEntry({**meta, **ids}, data, None, str(path))
 
