@@ -150,7 +150,7 @@ def test_simulate_reports_progress_on_a_terminal(monkeypatch, capsys):
     monkeypatch.setattr("skinsuction.model.simulate", fake_simulate([]))
     stderr = FakeTerminal()
     monkeypatch.setattr("sys.stderr", stderr)
-    monkeypatch.setattr(cli, "PROGRESS_QUIET_S", 0.0)  # the fake is instant
+    monkeypatch.setattr("skinsuction.commands.simulate.PROGRESS_QUIET_S", 0.0)  # the fake is instant
     code, out, _ = run(["simulate", "--probe", 6, "--x1d", 0.08, "--x1h", 4.1e-4], capsys)
     assert code == 0
     assert "simulate [" in stderr.getvalue() and "50/50" in stderr.getvalue()

@@ -20,8 +20,8 @@ from __future__ import annotations
 import argparse
 import math
 
-__all__ = ["number", "positive", "non_negative", "non_negative_int", "positive_int",
-           "refinement", "unit_interval"]
+__all__ = ["number", "positive", "non_negative", "negative", "non_negative_int",
+           "positive_int", "refinement", "unit_interval", "open_unit_interval"]
 
 
 def number(text: str) -> float:
@@ -48,6 +48,14 @@ def non_negative(text: str) -> float:
     value = number(text)
     if value < 0:
         raise argparse.ArgumentTypeError(f"must be >= 0, got {text}")
+    return value
+
+
+def negative(text: str) -> float:
+    """argparse type: a number < 0 (a BIC difference a cause must reach)."""
+    value = number(text)
+    if not value < 0:
+        raise argparse.ArgumentTypeError(f"must be negative, got {text}")
     return value
 
 
@@ -86,3 +94,11 @@ def unit_interval(text: str) -> float:
 def positive_int(text: str) -> int:
     """argparse type: an integer >= 1."""
     return _whole_number(text, 1)
+
+
+def open_unit_interval(text: str) -> float:
+    """argparse type: a number in (0, 1) (a confidence level, a test's level)."""
+    value = positive(text)
+    if not value < 1:
+        raise argparse.ArgumentTypeError(f"must lie in (0, 1), got {text}")
+    return value

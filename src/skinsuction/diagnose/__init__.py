@@ -1,6 +1,6 @@
 """Diagnosis of measured suction curves: what the neo-Hookean model gets wrong and why.
 
-``skinsuction diagnose MEASURED.csv --out DIR`` (:func:`command`):
+``skinsuction diagnose MEASURED.csv --out DIR`` (:mod:`skinsuction.commands.diagnose`):
 
 1. fits the two-layer neo-Hookean model (both probes jointly when both are
    present) on the neo-Hookean scale-free space;
@@ -34,7 +34,6 @@ is studied in :mod:`skinsuction.evaluation`, which this package does not import.
 """
 
 from skinsuction.space import BASELINE, DEFAULT_CAUSES, NONE, Cause, default_registry, registry_from_config
-from ._cli import add_arguments, command
 from ._diagnose import (
     BeyondSpaceError,
     Settings,
@@ -52,7 +51,6 @@ from ._time import VISCOELASTIC_CREEP, diagnose_time_data, diagnose_time_file, w
 
 __all__ = [
     "BASELINE", "NONE", "Cause", "DEFAULT_CAUSES", "default_registry", "registry_from_config",
-    "add_arguments", "command",
     "Settings", "diagnose", "diagnose_file", "prepare_data",
     "BeyondSpaceError", "decide", "fit_in_window", "ratio_window",
     "Fit", "FitData", "ModelCurves", "fit_model", "nested_start",

@@ -7,8 +7,9 @@ OCT) as header lines, and a long study table as columns of the same names::
     # dermis_thickness_sd_mm: 0.1
     # hypodermis_thickness_mm: 3.0
 
-Options (``--dermis-thickness-mm`` ...) override the file.  A thickness not
-given is the paper's 1 mm, and every output says so (:meth:`Geometry.assumptions`).
+Options (``--dermis-thickness-mm`` ..., defined with the commands in
+:mod:`skinsuction.commands`) override the file.  A thickness not given is the
+paper's 1 mm, and every output says so (:meth:`Geometry.assumptions`).
 """
 
 from __future__ import annotations
@@ -188,35 +189,3 @@ def geometry_of(data, *, dermis_thickness_mm=None, hypodermis_thickness_mm=None,
     geometry = Geometry(t_d=1.0 if t_d is None else t_d, t_h=1.0 if t_h is None else t_h,
                         given=given, sd=sd)
     return geometry, warnings
-
-
-def add_geometry_arguments(p) -> None:
-    """Command-line options of the layer thicknesses (identify, diagnose, study)."""
-    from skinsuction._argtypes import positive, positive_int
-
-    g = p.add_argument_group(
-        "the subject's layers",
-        "measured on the same site (ultrasound, OCT); they override the file's header "
-        "lines (# dermis_thickness_mm: 1.3). Not given: the paper's 1 mm, stated in the "
-        "outputs as an assumption")
-    g.add_argument("--dermis-thickness-mm", type=positive, default=None, metavar="MM",
-                   help="thickness of the dermis with the epidermis, mm")
-    g.add_argument("--dermis-thickness-sd-mm", type=positive, default=None, metavar="MM",
-                   help="its standard deviation (widens the intervals), mm")
-    g.add_argument("--hypodermis-thickness-mm", type=positive, default=None, metavar="MM",
-                   help="thickness of the hypodermis over the bone (fixed bottom), mm")
-    g.add_argument("--hypodermis-thickness-sd-mm", type=positive, default=None, metavar="MM",
-                   help="its standard deviation, mm")
-    g.add_argument("--no-solve", action="store_true",
-                   help="refuse a probe or layers the simulated space lacks instead of solving "
-                        "their 16 neo-Hookean FE rays a probe on demand (10-40 s of CPU each, "
-                        "cached in $SKINSUCTION_CACHE or ~/.cache/skinsuction)")
-    g.add_argument("--workers", type=positive_int, default=1,
-                   help="processes for rays solved on demand (default 1)")
-
-
-def thickness_from_args(args) -> dict:
-    """The thickness keywords of :func:`geometry_of` from parsed options."""
-    return {k: getattr(args, k) for k in ("dermis_thickness_mm", "dermis_thickness_sd_mm",
-                                          "hypodermis_thickness_mm", "hypodermis_thickness_sd_mm")
-            if getattr(args, k, None) is not None}
