@@ -16,8 +16,9 @@ Modules: ``_storage`` (point ids, curve files, Parquet with provenance),
 database), ``_lagrange`` (local cubic Lagrange weights on one axis),
 ``_interpolate`` (a grid of one probe, :class:`GriddedSpace`, interpolated with
 its NaN policy), ``_causes`` (the cause coordinates of the
-scale-free space), ``_rays``, ``_ray_solve`` and ``_ray_interpolate`` (the
-scale-free layout), ``_geometry`` (the spaces of one measurement at its probes and layer
+scale-free space), ``_rays`` (which rays: their ids, the specification, the FE
+jobs), ``_ray_space`` (the rays stored and read back), ``_ray_solve`` and
+``_ray_interpolate`` (the scale-free layout solved and interpolated), ``_geometry`` (the spaces of one measurement at its probes and layer
 thicknesses, rays solved on demand), ``_open`` (either layout, per probe), ``_shipped`` (the
 default space: the workflow's build in the working directory, else the one
 shipped with the package; comparing and shipping builds).
@@ -68,23 +69,25 @@ from ._lagrange import LagrangeAxis
 from ._open import LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
 from ._ray_solve import build_ray_spaces, compute_bundle, compute_ray
+from ._ray_space import (
+    RaySpace,
+    SpaceFileError,
+    SpaceMissingError,
+    assemble_ray_space,
+    coverage_frontier,
+    read_ray_space,
+    read_ray_spaces,
+)
 from ._rays import (
     BUNDLE_ID_PATTERN,
     EXTRA_KEYWORDS,
     RAY_ID_PATTERN,
-    RaySpace,
     RaySpec,
-    SpaceFileError,
-    SpaceMissingError,
-    assemble_ray_space,
     bundle_id,
-    coverage_frontier,
     parse_ray_id,
     ray_bundles,
     ray_id,
     rays_of,
-    read_ray_space,
-    read_ray_spaces,
 )
 from ._shipped import (
     PROVENANCE_FILE,

@@ -381,7 +381,7 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
     ...
     skinsuction.space._geometry.GeometryOutsideSpace: no neo-Hookean rays of the 4 mm probe for ...
     """
-    from ._rays import RaySpace
+    from ._ray_space import RaySpace
 
     probes = [float(p) for p in probes]
     base = spaces[BASELINE]
@@ -491,7 +491,7 @@ def _subset(nodes, full) -> dict:
 def _nuisances(center, probes, geometry, layers, on_demand, notes, full_nodes=()) -> tuple:
     """A :class:`ThicknessNuisance` per given thickness with an sd (rays on demand):
     brackets of ``center``'s own model (neo-Hookean, or a cause at every node)."""
-    from ._rays import RaySpace
+    from ._ray_space import RaySpace
 
     cause = center.cause
     coordinates = np.array([math.nan]) if cause is None else np.asarray(cause.nodes, float)

@@ -21,7 +21,7 @@ from ._geometry import Geometry, GeometryOutsideSpace, OnDemandRays, spaces_at
 from ._grid import read_space
 from ._interpolate import GriddedSpace
 from ._ray_interpolate import NeoHookeanSlice
-from ._rays import read_ray_space, read_ray_spaces
+from ._ray_space import read_ray_space, read_ray_spaces
 from ._shipped import resolve_space
 
 __all__ = ["ProbeSpace", "LoadedSpace", "load_space", "APERTURE_RANGE_MM"]

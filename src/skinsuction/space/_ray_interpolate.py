@@ -16,7 +16,7 @@ import numpy as np
 
 from ._interpolate import GriddedSpace, SpaceInterpolant
 from ._lagrange import LagrangeAxis
-from ._rays import RaySpace
+from ._ray_space import RaySpace
 
 __all__ = ["RayInterpolant", "NeoHookeanSlice", "TabulatedInterpolant"]
 

@@ -17,7 +17,8 @@ import pandas as pd
 from skinsuction._progress import Progress
 
 from ._causes import BASELINE
-from ._rays import EXTRA_KEYWORDS, RaySpec, assemble_ray_space, parse_ray_id, ray_bundles
+from ._ray_space import assemble_ray_space
+from ._rays import EXTRA_KEYWORDS, RaySpec, parse_ray_id, ray_bundles
 from ._solve import solve_with_fallbacks
 from ._storage import AXES, _write_parquet, curve_frame
 
@@ -28,12 +29,33 @@ __all__ = ["compute_ray", "compute_bundle", "build_ray_spaces"]
 
 # ---------------------------------------------------------------------- FE rays
 def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=None):
-    """Run the FE model (and its fallbacks) for the ray ``rid``: (Curve, frame, info).
+    """Run the FE model (and its fallbacks) for the ray ``rid``.
 
     One solve runs every pressure, the onset loads near 0 included (see
     :attr:`RaySpec.load_refine`): the solver's increments grow to the largest
     spacing of the pressures, so the onset's small first steps cost a few
     increments, not a solve of their own.
+
+    Parameters
+    ----------
+    rid : str
+        The ray id (:func:`skinsuction.space.ray_id`): the skin, probe and bottom.
+    pressures_mbar : sequence of float
+        The pressures of the FE run (``RaySpec.pressures_mbar``).
+    mesh : dict, optional
+        Mesh and solver settings.
+    fallback : dict or list of dict, optional
+        Fallback meshes (:func:`skinsuction.space.solve_with_fallbacks`); a
+        fallback's curve is spliced on where the first solve stopped.
+
+    Returns
+    -------
+    curve : skinsuction.model.Curve
+    frame : pandas.DataFrame
+        The ray's rows (one per pressure) with ``ray_id`` and the extra keywords.
+    info : dict
+        The solver's record: converged, last pressure, reason, iterations,
+        seconds, the fallback kept.
     """
     params = parse_ray_id(rid)
     extras = {k: params[k] for k in EXTRA_KEYWORDS if params[k] != EXTRA_KEYWORDS[k]}
@@ -61,6 +83,26 @@ def compute_bundle(ray_ids, path, pressures_mbar, mesh: dict | None = None, fall
     The adapter of the workflow's ``simulate_ray_bundle`` rule.  A ray that stops
     early is written as it is (NaN beyond its last converged pressure), with its
     reason; an exception of the model becomes a failed ray, never a missing one.
+
+    Parameters
+    ----------
+    ray_ids : iterable of str
+        The rays of the bundle.
+    path : path-like
+        The bundle file.
+    pressures_mbar : sequence of float
+        The pressures of the FE runs.
+    mesh : dict, optional
+        Mesh and solver settings.
+    fallback : dict or list of dict, optional
+        Fallback meshes.
+    metadata : dict, optional
+        Extra provenance for the file.
+
+    Returns
+    -------
+    dict
+        ``{ray_id: info}``: each ray's solver record (:func:`compute_ray`).
     """
     from skinsuction.provenance import collect
 
@@ -82,8 +124,27 @@ def build_ray_spaces(spec: RaySpec, causes: dict, out_dir=None, workers: int = 1
     For tests, notebooks and benchmarks; the workflow runs one job per bundle.
     With ``out_dir`` the bundle and space files are written there
     (``out_dir/rays/<bundle>.parquet``, ``out_dir/<name>.parquet``); bundle files
-    already present are reused. Progress goes to ``progress`` (a stream; default
-    stderr): a bar on a terminal, a line every 10 s otherwise.
+    already present are reused.
+
+    Parameters
+    ----------
+    spec : RaySpec
+    causes : dict
+        ``{name: Cause}``: the causes' spaces besides the neo-Hookean one.
+    out_dir : path-like, optional
+        Where the files are written (default: a temporary folder, removed).
+    workers : int
+        Processes that run the bundles.
+    config : dict, optional
+        The configuration, recorded in each space's provenance.
+    progress : text stream, optional
+        Where progress goes (default stderr): a bar on a terminal, a line every
+        10 s otherwise.
+
+    Returns
+    -------
+    dict
+        ``{name: RaySpace}``, ``neo_hookean`` included.
     """
     import tempfile
 

@@ -14,82 +14,39 @@ runs on the 2-D grid (r, c) only, and the neo-Hookean space a 1-D set of rays
 over r; a curve up to ``p_max`` is covered for ``X1d >= p_max / load_max``.
 Where a ray stopped early (large deflections over a very soft hypodermis) it is
 NaN beyond, candidates that need that part get cost +inf, and the stop is
-recorded (:func:`coverage_frontier`).
+recorded (:func:`skinsuction.space.coverage_frontier`).
 
-Interpolation (:class:`RayInterpolant`):
+This module says which rays a space has: their names (:func:`ray_id`), the
+specification (:class:`RaySpec`), the rays of each model (:func:`rays_of`) and
+the FE jobs that run them (:func:`ray_bundles`).  The rays stored and read
+back are :mod:`._ray_space`'s; solved, :mod:`._ray_solve`'s; interpolated,
+:mod:`._ray_interpolate`'s:
 
 * across rays, cubic Lagrange in ``log10 r`` and in the cause's axis
   coordinate (:meth:`Cause.to_axis`), applied to ``log M`` (the deflection
   varies by decades over r; its logarithm is close to a smooth sigmoid in
   log r), at the ray loads;
 * then along the load of the ray, cubic Lagrange on M at ``q``.
-
-The identification tabulates the neo-Hookean rays of a probe once per curve
-(:class:`TabulatedInterpolant`).
-
-Storage: the FE jobs write bundles of rays (one per model, probe and r,
-:func:`ray_bundles`); :func:`assemble_ray_space` writes one Parquet file per
-model (``results/simulated_space/scale_free/<model>.parquet``) with one row
-per (probe, r, c, pressure) and the cause, the axes, the coverage and the
-provenance in the schema metadata; ``neo_hookean.parquet`` holds the rays at
-the neutral coordinate of every cause (the same FE runs).
 """
 
 from __future__ import annotations
 
-import logging
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ._causes import BASELINE, Cause
-from ._storage import (
-    AXES,
-    POINT_ID_PATTERN,
-    _fmt,
-    _read_parquet,
-    _write_parquet,
-    parse_point_id,
-    point_id,
-    round_sig,
-)
+from ._storage import AXES, POINT_ID_PATTERN, _fmt, parse_point_id, point_id, round_sig
 
-log = logging.getLogger(__name__)
-
-__all__ = [
-    "RaySpec",
-    "RaySpace",
-    "ray_id",
-    "parse_ray_id",
-    "RAY_ID_PATTERN",
-    "rays_of",
-    "ray_bundles",
-    "bundle_id",
-    "BUNDLE_ID_PATTERN",
-    "coverage_frontier",
-    "assemble_ray_space",
-    "read_ray_space",
-    "read_ray_spaces",
-    "SpaceMissingError",
-    "SpaceFileError",
-]
+__all__ = ["RaySpec", "ray_id", "parse_ray_id", "RAY_ID_PATTERN", "EXTRA_KEYWORDS", "rays_of",
+           "ray_bundles", "bundle_id", "BUNDLE_ID_PATTERN"]
 
 #: Extra keywords of the model beyond the grid axes of a point id, with defaults.
 EXTRA_KEYWORDS = {"prestretch": 1.0}
 
 #: Snakemake wildcard constraint of a ray id.
 RAY_ID_PATTERN = POINT_ID_PATTERN + r"(?:__[a-z][a-z0-9_]*=[^/_]+)*"
-
-
-class SpaceMissingError(FileNotFoundError):
-    """The ray spaces the diagnosis needs are not there (build them with the workflow)."""
-
-
-class SpaceFileError(ValueError):
-    """A file of the space directory is not a ray space of the diagnosis."""
 
 
 # ------------------------------------------------------------------------ ray ids
@@ -99,6 +56,18 @@ def ray_id(params: dict) -> str:
     Extra keywords (``prestretch``) at their default value are left out, so a
     neo-Hookean ray has the plain point id.
 
+    Parameters
+    ----------
+    params : dict
+        The ray's grid-point keywords (:data:`skinsuction.space.AXES`; the missing
+        ones at their defaults) and extra keywords (:data:`EXTRA_KEYWORDS`).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
     >>> ray_id(dict(probe_mm=6, bottom="fixed", x1d=0.02, x1h=2e-4, prestretch=1.05))
     'p6_fixed_x1d0.02_x1h0.0002_x2d0_x2h0_td1_th1__prestretch=1.05'
     >>> parse_ray_id(_)["prestretch"]
@@ -116,7 +85,18 @@ def ray_id(params: dict) -> str:
 
 
 def parse_ray_id(rid: str) -> dict:
-    """The model keywords of a ray id (inverse of :func:`ray_id`), extras included."""
+    """The model keywords of a ray id (inverse of :func:`ray_id`), extras included.
+
+    Parameters
+    ----------
+    rid : str
+        A ray id.
+
+    Returns
+    -------
+    dict
+        The keywords of :data:`skinsuction.space.AXES` and of :data:`EXTRA_KEYWORDS`.
+    """
     base, *extras = rid.split("__")
     out = parse_point_id(base)
     out.update(EXTRA_KEYWORDS)
@@ -226,18 +206,46 @@ class RaySpec:
         return tuple(round_sig(float(q) * self.x1d_ref) for q in self.load_nodes)
 
     def x1d_lower(self, p_max_mbar: float) -> float:
-        """Lowest X1d (MPa) searched for a curve up to ``p_max_mbar``."""
+        """Lowest X1d (MPa) searched for a curve up to ``p_max_mbar``.
+
+        Parameters
+        ----------
+        p_max_mbar : float
+            The highest pressure of the curve (mbar).
+
+        Returns
+        -------
+        float
+        """
         return max(self.x1d_range[0], float(p_max_mbar) / self.load_max)
 
     def reach_mbar(self) -> float:
-        """Highest pressure any X1d of the window can be read at (mbar)."""
+        """Highest pressure any X1d of the window can be read at (mbar).
+
+        Returns
+        -------
+        float
+        """
         return self.load_max * self.x1d_range[1]
 
     @classmethod
     def from_config(cls, section: dict, study_mesh: dict | None = None,
                     study_fallback=None) -> "RaySpec":
-        """From the ``scale_free_space`` section (axis forms allowed); mesh = study mesh
-        updated by its ``mesh``; fallbacks = its ``mesh_fallback`` or the study's."""
+        """The specification of the ``scale_free_space`` section of the configuration.
+
+        Parameters
+        ----------
+        section : dict
+            The section (axis forms allowed, :func:`skinsuction.space.expand_axis`).
+        study_mesh : dict, optional
+            The study's ``mesh``, updated by the section's own ``mesh``.
+        study_fallback : dict or list of dict, optional
+            The study's ``mesh_fallback``, used where the section has none.
+
+        Returns
+        -------
+        RaySpec
+        """
         from ._grid import expand_axis
 
         mesh = {**(study_mesh or {}), **(section.get("mesh") or {})}
@@ -257,6 +265,12 @@ class RaySpec:
         )
 
     def to_dict(self) -> dict:
+        """The specification as plain JSON-able values (``RaySpec(**d)`` reads it back).
+
+        Returns
+        -------
+        dict
+        """
         return {"probes_mm": list(self.probes_mm), "ratio_nodes": list(self.ratio_nodes),
                 "load_max": self.load_max, "load_steps": self.load_steps,
                 "load_refine": self.load_refine,
@@ -275,10 +289,22 @@ def _ray_params(spec: RaySpec, probe: float, ratio: float, cause: Cause | None, 
 
 
 def rays_of(spec: RaySpec, cause: Cause | None = None) -> list[dict]:
-    """The rays of one space: ``[{"ray_id", "probe_mm", "ratio", "coordinate", "params"}]``.
+    """The rays of one space.
 
-    ``cause=None`` is the neo-Hookean space (coordinate NaN).  The rays of a
-    cause at its neutral coordinate are the neo-Hookean rays (same ids, same FE run).
+    The rays of a cause at its neutral coordinate are the neo-Hookean rays (same
+    ids, same FE run).
+
+    Parameters
+    ----------
+    spec : RaySpec
+    cause : Cause, optional
+        None: the neo-Hookean space (coordinate NaN).
+
+    Returns
+    -------
+    list of dict
+        ``{"ray_id", "probe_mm", "ratio", "coordinate", "params"}`` per ray, by
+        probe, then X1h/X1d, then coordinate.
     """
     out = []
     coords = cause.nodes if cause is not None else (math.nan,)
@@ -299,6 +325,22 @@ BUNDLE_ID_PATTERN = r"[a-z][a-z0-9_]*__p[0-9.]+__r[0-9.e+-]+"
 def bundle_id(model: str, probe_mm: float, ratio: float, last_ratio: float | None = None) -> str:
     """Name of the bundle of rays of one model at one probe and X1h/X1d (or a run of them).
 
+    Parameters
+    ----------
+    model : str
+        ``neo_hookean`` or a cause's name.
+    probe_mm : float
+    ratio : float
+        The (first) X1h/X1d of the bundle.
+    last_ratio : float, optional
+        The last X1h/X1d of a run of them.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
     >>> bundle_id("pre_tension", 6.0, 0.001)
     'pre_tension__p6__r0.001'
     >>> bundle_id("neo_hookean", 2.0, 1e-4, 2.0)
@@ -318,6 +360,21 @@ def ray_bundles(spec: RaySpec, causes: dict, rays_per_job: int = 1) -> dict:
     A job costs about a second of start-up besides its rays (0.2-2 CPU-s each):
     a few dozen rays a job keep that small and still fill the cores to the end.
 
+    Parameters
+    ----------
+    spec : RaySpec
+    causes : dict
+        ``{name: Cause}``; the neo-Hookean bundles are always there.
+    rays_per_job : int
+        About how many rays a bundle holds.
+
+    Returns
+    -------
+    dict
+        ``{bundle_id: [ray_id, ...]}``.
+
+    Examples
+    --------
     >>> spec = RaySpec([2, 6], [0.01, 0.1, 1.0], load_max=100.0)
     >>> sorted(ray_bundles(spec, {}, rays_per_job=2))
     ['neo_hookean__p2__r0.01-0.1', 'neo_hookean__p2__r1', 'neo_hookean__p6__r0.01-0.1', 'neo_hookean__p6__r1']
@@ -338,202 +395,3 @@ def ray_bundles(spec: RaySpec, causes: dict, rays_per_job: int = 1) -> dict:
             key = bundle_id(name, ray["probe_mm"], first, last)
             out.setdefault(key, []).append(ray["ray_id"])
     return out
-
-
-# ------------------------------------------------------------------- ray spaces
-@dataclass(eq=False)
-class RaySpace:
-    """Rays of one model (neo-Hookean or one cause) for every probe.
-
-    Attributes
-    ----------
-    cause : Cause or None
-        None for the neo-Hookean space.
-    spec : RaySpec
-    coordinates : ndarray (n_c,)
-        Coordinates of the cause (``[nan]`` for the neo-Hookean space).
-    deflection_mm : dict probe_mm -> ndarray (n_r, n_c, n_p)
-        The rays (NaN where the FE run stopped).
-    metadata : dict
-    """
-
-    cause: Cause | None
-    spec: RaySpec
-    coordinates: np.ndarray
-    deflection_mm: dict
-    metadata: dict = field(default_factory=dict)
-    #: ThicknessNuisance per given layer thickness with an sd (see spaces_at)
-    nuisance: tuple = ()
-
-    @property
-    def name(self) -> str:
-        return BASELINE if self.cause is None else self.cause.name
-
-    @property
-    def probes_mm(self) -> tuple:
-        return tuple(sorted(self.deflection_mm))
-
-    def has_probe(self, probe_mm: float) -> bool:
-        return any(math.isclose(probe_mm, p, abs_tol=1e-6) for p in self.deflection_mm)
-
-    def rays(self, probe_mm: float) -> np.ndarray:
-        for p, a in self.deflection_mm.items():
-            if math.isclose(probe_mm, p, abs_tol=1e-6):
-                return a
-        raise KeyError(f"no {probe_mm:g} mm rays in the {self.name} space "
-                       f"(probes: {', '.join(f'{p:g}' for p in self.probes_mm)} mm)")
-
-    def null_slice(self) -> "RaySpace":
-        """The neo-Hookean rays of this space (its neutral coordinate)."""
-        if self.cause is None:
-            return self
-        j = int(np.argmin(np.abs(self.coordinates - self.cause.neutral)))
-        return RaySpace(None, self.spec, np.array([math.nan]),
-                        {p: a[:, j:j + 1] for p, a in self.deflection_mm.items()},
-                        dict(self.metadata))
-
-    def frame(self) -> pd.DataFrame:
-        rows = []
-        p = np.asarray(self.spec.pressures_mbar)
-        for probe, a in self.deflection_mm.items():
-            for i, r in enumerate(self.spec.ratio_nodes):
-                for j, c in enumerate(self.coordinates):
-                    rows.append(pd.DataFrame({
-                        "probe_mm": probe, "ratio": r, "coordinate": c,
-                        "pressure_mbar": p, "deflection_mm": a[i, j]}))
-        return pd.concat(rows, ignore_index=True)
-
-
-def _last_reached(rays: np.ndarray, loads: np.ndarray) -> np.ndarray:
-    """Highest load with a finite deflection along the last axis (0 if none)."""
-    finite = np.isfinite(rays)
-    # a ray is a prefix of finite values: its reach is the last finite node
-    idx = finite.shape[-1] - 1 - np.argmax(finite[..., ::-1], axis=-1)
-    return np.where(finite.any(axis=-1), loads[idx], 0.0)
-
-
-def coverage_frontier(space: "RaySpace") -> pd.DataFrame:
-    """The highest load p/X1d each ray reached, one row per (probe, ratio, coordinate).
-
-    Columns: ``model, probe_mm, ratio, coordinate, load_reached, load_max,
-    complete, reason, mesh_fallback, ray_id``.  ``complete`` is True where the ray
-    reaches ``load_max``; ``reason`` is the solver's reason where it stopped.
-    """
-    loads = space.spec.load_nodes
-    solver = space.metadata.get("rays", {})
-    ids = {(r["probe_mm"], r["ratio"], r["coordinate"] if space.cause else None): r["ray_id"]
-           for r in rays_of(space.spec, space.cause)}
-    rows = []
-    for probe, a in sorted(space.deflection_mm.items()):
-        reach = _last_reached(a, loads)
-        for i, r in enumerate(space.spec.ratio_nodes):
-            for j, c in enumerate(space.coordinates):
-                rid = ids.get((probe, r, c if space.cause else None), "")
-                info = solver.get(rid, {})
-                rows.append({"model": space.name, "probe_mm": probe, "ratio": r,
-                             "coordinate": c, "load_reached": float(reach[i, j]),
-                             "load_max": space.spec.load_max,
-                             "complete": bool(reach[i, j] >= space.spec.load_max * (1 - 1e-9)),
-                             "reason": info.get("reason", ""),
-                             "mesh_fallback": int(info.get("mesh_fallback", 0) or 0),
-                             "ray_id": rid})
-    return pd.DataFrame(rows)
-
-
-def assemble_ray_space(bundle_paths, out_path, spec: RaySpec, cause: Cause | None,
-                       config: dict | None = None) -> RaySpace:
-    """Assemble the bundle files of one model into its space file (atomic Parquet).
-
-    Every ray of :func:`rays_of` must be in one of ``bundle_paths`` (extra rays
-    are ignored); rays that stopped early keep their NaN tail, and the coverage
-    frontier (:func:`coverage_frontier`) goes into the metadata.
-    """
-    from skinsuction.provenance import collect
-
-    by_id, solver = {}, {}
-    for path in bundle_paths:
-        frame, meta = _read_parquet(path)
-        for rid, g in frame.groupby("ray_id", sort=False):
-            by_id[rid] = g
-            solver[rid] = (meta.get("rays") or {}).get(rid, {})
-    p = np.asarray(spec.pressures_mbar)
-    rays = rays_of(spec, cause)
-    coords = np.array(cause.nodes if cause is not None else [math.nan])
-    arrays = {probe: np.full((len(spec.ratio_nodes), coords.size, p.size), np.nan)
-              for probe in spec.probes_mm}
-    name = cause.name if cause else BASELINE
-    for ray in rays:
-        frame = by_id.get(ray["ray_id"])
-        if frame is None:
-            raise ValueError(f"ray {ray['ray_id']} of the {name} space is missing from the "
-                             "inputs")
-        fp = frame["pressure_mbar"].to_numpy(float)
-        if fp.shape != p.shape or not np.allclose(fp, p):
-            raise ValueError(f"ray {ray['ray_id']}: pressures differ from the specification "
-                             "(rebuild the rays)")
-        i = spec.ratio_nodes.index(ray["ratio"])
-        j = 0 if cause is None else cause.nodes.index(ray["coordinate"])
-        arrays[ray["probe_mm"]][i, j] = frame["deflection_mm"].to_numpy(float)
-    ray_info = {r["ray_id"]: solver[r["ray_id"]] for r in rays}
-    n_failed = sum(1 for r in ray_info.values() if not r.get("converged", False))
-    space = RaySpace(cause, spec, coords, arrays, {"rays": ray_info})
-    frontier = coverage_frontier(space)
-    meta = collect(config=config, space=name,
-                   cause=cause.to_dict() if cause else None, ray_spec=spec.to_dict(),
-                   n_rays=len(rays), n_stopped=n_failed, rays=ray_info,
-                   coverage=frontier.drop(columns=["reason"]).to_dict(orient="records"))
-    space = RaySpace(cause, spec, coords, arrays, meta)
-    _write_parquet(space.frame(), out_path, meta)
-    log.info("%s space: %d rays (%d stopped early) -> %s", name, len(rays), n_failed, out_path)
-    return space
-
-
-def read_ray_space(path) -> RaySpace:
-    """Read a space written by :func:`assemble_ray_space`."""
-    frame, meta = _read_parquet(path)
-    if "ray_spec" not in meta or "load_max" not in meta["ray_spec"]:
-        raise ValueError(f"{path}: not a scale-free simulated space (rebuild it with the "
-                         "workflow)")
-    spec = RaySpec(**meta["ray_spec"])
-    cause = Cause.from_dict(meta["cause"]) if meta.get("cause") else None
-    coords = np.array(cause.nodes if cause is not None else [math.nan])
-    p = np.asarray(spec.pressures_mbar)
-    arrays = {}
-    for probe, g in frame.groupby("probe_mm"):
-        a = np.full((len(spec.ratio_nodes), coords.size, p.size), np.nan)
-        i = np.searchsorted(np.asarray(spec.ratio_nodes), g["ratio"].to_numpy(float))
-        j = (np.zeros(len(g), int) if cause is None
-             else np.searchsorted(coords, g["coordinate"].to_numpy(float)))
-        k = np.searchsorted(p, g["pressure_mbar"].to_numpy(float))
-        a[i, j, k] = g["deflection_mm"].to_numpy(float)
-        arrays[float(probe)] = a
-    return RaySpace(cause, spec, coords, arrays, meta)
-
-
-def read_ray_spaces(space_dir) -> dict:
-    """All spaces of a scale-free space directory: ``{name: RaySpace}``.
-
-    The neo-Hookean one is needed.  Raises :class:`SpaceMissingError` with the
-    command that builds them if the directory or the neo-Hookean space is missing.
-    """
-    d = Path(space_dir)
-    if d.is_file() and d.suffix == ".parquet":
-        d = d.parent
-    hint = ("build it with the workflow: `snakemake --cores 2 scale_free_space` "
-            "(or `--configfile config/ci.yaml --replace-workflow-config` for a coarse one)")
-    if not d.is_dir():
-        raise SpaceMissingError(f"{d}: no such directory of the scale-free space; {hint}")
-    spaces = {}
-    for path in sorted(d.glob("*.parquet")):
-        try:
-            s = read_ray_space(path)
-        except Exception as err:  # pyarrow raises many types for a bad file
-            raise SpaceFileError(f"{path}: not a scale-free space ({type(err).__name__}: "
-                                 f"{' '.join(str(err).split())[:200]})") from None
-        spaces[s.name] = s
-    if BASELINE not in spaces:
-        raise SpaceMissingError(f"{d}: no {BASELINE}.parquet (the neo-Hookean rays); {hint}")
-    return spaces
-
-
-# ------------------------------------------------------------------ interpolation

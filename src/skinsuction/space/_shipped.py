@@ -49,7 +49,8 @@ import pandas as pd
 from skinsuction._files import atomic_output, file_sha256, write_table
 
 from ._causes import BASELINE
-from ._rays import RaySpace, read_ray_space, rays_of
+from ._ray_space import RaySpace, read_ray_space
+from ._rays import rays_of
 
 log = logging.getLogger(__name__)
 
