@@ -91,21 +91,23 @@ from ._rays import (
 )
 from ._shipped import (
     PROVENANCE_FILE,
-    SHIPPED_ATOL_MM,
-    SHIPPED_RTOL,
     SHIPPED_SPACE_DIR,
     WORKFLOW_SPACE_DIR,
-    ShippedSpaceMismatch,
     SpaceSource,
-    check_shipped_space,
-    compare_ray_spaces,
     default_space_dir,
-    knife_edge_rays,
     resolve_space,
     ship_space,
-    shipped_check_applies,
     shipped_provenance,
     verify_shipped_files,
+)
+from ._shipped_check import (
+    SHIPPED_ATOL_MM,
+    SHIPPED_RTOL,
+    ShippedSpaceMismatch,
+    check_shipped_space,
+    compare_ray_spaces,
+    knife_edge_rays,
+    shipped_check_applies,
 )
 from ._solve import compute_point, solve_with_fallbacks
 from ._storage import (
