@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 import yaml
 
-from skinsuction.diagnose import BASELINE, Cause, FitData, Settings, add_arguments, bic, default_registry, diagnose, fit_model, misfit_test, noise_from_differences, noise_from_replicates, registry_from_config, write_report
+from skinsuction.commands.diagnose import add_arguments
+from skinsuction.diagnose import BASELINE, Cause, FitData, Settings, bic, default_registry, diagnose, fit_model, misfit_test, noise_from_differences, noise_from_replicates, registry_from_config, write_report
 from skinsuction.space import RayInterpolant, RaySpace, RaySpec, SpaceMissingError, parse_ray_id, ray_id, rays_of, read_ray_space, read_ray_spaces
 from skinsuction.space import RAY_ID_PATTERN, ray_bundles
 from skinsuction.space._storage import _write_parquet
@@ -409,7 +410,7 @@ def test_one_probe_only_has_no_holdout():
 
 # ------------------------------------------------------------------ CLI function
 def test_command_without_spaces_says_how_to_build_them(tmp_path):
-    from skinsuction.diagnose import command
+    from skinsuction.commands.diagnose import run as command
     from skinsuction.identify.measured_fit import InputError
 
     csv = tmp_path / "m.csv"

@@ -6,7 +6,7 @@ a seed which moduli, which effect size and which noise a virtual experiment
 has, runs the FE model directly at those parameters (on the same mesh as the
 spaces, so the test sees the interpolation and the statistics, not the mesh),
 writes the curves as a measured CSV and runs ``skinsuction diagnose`` on it
-through :func:`skinsuction.diagnose.command`.  It requires the hidden cause,
+through :func:`skinsuction.commands.diagnose.run`.  It requires the hidden cause,
 a decisive gain, and the extended parameters within tolerance; and ``none``
 for a neo-Hookean experiment.
 
@@ -35,7 +35,9 @@ import numpy as np
 import pytest
 import yaml
 
-from skinsuction.diagnose import NONE, add_arguments, command, registry_from_config
+from skinsuction.commands.diagnose import add_arguments
+from skinsuction.commands.diagnose import run as command
+from skinsuction.diagnose import NONE, registry_from_config
 from skinsuction.evaluation import DETECTABLE_EFFECTS, DRAW_RANGES, draw_experiment, write_csv
 from skinsuction.space import RaySpec, build_ray_spaces
 

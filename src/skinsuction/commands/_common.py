@@ -152,7 +152,7 @@ def add_out(p: argparse.ArgumentParser, *, help: str, metavar: str = "DIR",
 
 
 def add_space(p: argparse.ArgumentParser, *, help: str, metavar: str = "DIR",
-              aliases: tuple = ()) -> None:
+              aliases: tuple = (), dest: str = "space") -> None:
     """``--space`` (and ``aliases``): the simulated space (``args.space``, default None).
 
     Parameters
@@ -163,12 +163,14 @@ def add_space(p: argparse.ArgumentParser, *, help: str, metavar: str = "DIR",
     metavar : str
     aliases : tuple of str
         Other flags of the same option (e.g. ``--space-dir``).
+    dest : str
+        The attribute of the parsed arguments (``diagnose`` keeps its ``space_dir``).
 
     Returns
     -------
     None
     """
-    p.add_argument("--space", *aliases, dest="space", default=None, metavar=metavar, help=help)
+    p.add_argument("--space", *aliases, dest=dest, default=None, metavar=metavar, help=help)
 
 
 def add_probe(p: argparse.ArgumentParser, *, help: str, required: bool = False) -> None:

@@ -71,7 +71,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                          "the layer thicknesses (# dermis_thickness_mm: 1.3)")
     add_out(p, help="output folder: report.json, report.md, fit.png/pdf, "
                     "residuals.png/pdf, gain.png/pdf")
-    add_space(p, aliases=("--space-dir",),
+    add_space(p, aliases=("--space-dir",), dest="space_dir",
               help="folder of the scale-free simulated space (neo_hookean.parquet and one "
                    "file per cause). Default: results/simulated_space/scale_free if the "
                    "workflow has built it under the working directory (`snakemake "
@@ -130,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
     if isinstance(data, MeasuredTimeData):
         return _run_time(args, settings, data)
     with _space_errors():
-        report = diagnose_file(data, args.space, settings,
+        report = diagnose_file(data, args.space_dir, settings,
                                thickness=thickness_from_args(args),
                                on_demand=False if args.no_solve else None,
                                workers=args.workers)
@@ -151,7 +151,7 @@ def _run_time(args: argparse.Namespace, settings, data) -> int:
     from skinsuction.diagnose import diagnose_time_file, write_time_report
 
     with _space_errors():
-        report = diagnose_time_file(data, args.space, settings,
+        report = diagnose_time_file(data, args.space_dir, settings,
                                     thickness=thickness_from_args(args),
                                     solve_on_demand=not args.no_solve, workers=args.workers)
     with writing(args.out):
