@@ -36,6 +36,7 @@ Examples
 """
 
 from skinsuction._files import atomic_output, write_table
+from skinsuction.measured import DEFAULT_LAYERS_MM, Geometry
 
 from ._causes import (
     BASELINE,
@@ -47,11 +48,8 @@ from ._causes import (
     registry_from_config,
 )
 from ._geometry import (
-    DEFAULT_LAYERS_MM,
-    Geometry,
+    THICKNESS_RESOLUTION_MM,
     GeometryOutsideSpace,
-    OnDemandRays,
-    default_cache_dir,
     ThicknessNuisance,
     spaces_at,
     window_nodes,
@@ -66,6 +64,7 @@ from ._grid import (
 )
 from ._interpolate import GriddedSpace, SpaceInterpolant, evaluate, interpolate_pressure
 from ._lagrange import LagrangeAxis
+from ._on_demand import OnDemandRays, default_cache_dir
 from ._open import LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
 from ._ray_solve import build_ray_spaces, compute_bundle, compute_ray
@@ -158,5 +157,6 @@ __all__ = [
     "NeoHookeanSlice", "RayInterpolant", "TabulatedInterpolant",
     # every probe and the subject's layers
     "DEFAULT_LAYERS_MM", "Geometry", "GeometryOutsideSpace", "OnDemandRays",
-    "default_cache_dir", "spaces_at", "ThicknessNuisance",
+    "default_cache_dir", "spaces_at", "ThicknessNuisance", "window_nodes",
+    "THICKNESS_RESOLUTION_MM",
 ]

@@ -3,46 +3,39 @@
 The scale-free space holds rays of the Cutometer probes (2, 4, 6 and 8 mm) for
 the paper's layers (dermis and hypodermis 1 mm each).  A measurement with another
 aperture, or with its own layer thicknesses (ultrasound, OCT), gets its
-neo-Hookean rays solved on demand at exactly that geometry, with the space's ray
-specification (:class:`OnDemandRays`), and cached on disk: 16 FE rays per probe,
-about 10-20 s of CPU, once per geometry.  Interpolating a precomputed grid over
-the geometry instead was measured and rejected: under a soft hypodermis the
-deflection changes fourfold between t_d/a = 0.2 and 0.55, and cubic
-interpolation on nodes 1.3 apart in t_d/a still missed direct runs by up to 1.1 %
-(median 0.3 %), where the space must stay within 0.2 % (docs/geometry.md).
-
-Geometric similarity, M(s a, s t_d, s t_h) = s M(a, t_d, t_h) (tested to
-round-off in tests/test_model.py), makes a cached set of rays serve every
-geometrically similar measurement: the cache key is the dimensionless geometry
-(t_d/a, t_h/a), the rays are scaled by the aperture.
+neo-Hookean rays solved on demand at exactly that geometry
+(:class:`skinsuction.space.OnDemandRays`, :mod:`._on_demand`).  Interpolating a
+precomputed grid over the geometry instead was measured and rejected: under a
+soft hypodermis the deflection changes fourfold between t_d/a = 0.2 and 0.55,
+and cubic interpolation on nodes 1.3 apart in t_d/a still missed direct runs by
+up to 1.1 % (median 0.3 %), where the space must stay within 0.2 %
+(docs/geometry.md).
 
 The causes get their own rays at that geometry too, solved on demand
 (:func:`spaces_at`); a diagnosis asks only for the X1h/X1d nodes in a window
 around its neo-Hookean fit and widens it where a cause's fit reaches its edge
-(``ratio_window``).  Without a solver a cause's effect on log M is carried over
-from the probes and layers it was simulated for, an approximation the notes
-name.
+(``ratio_window``, :func:`window_nodes`).  Without a solver a cause's effect on
+log M is carried over from the probes and layers it was simulated for, an
+approximation the notes name.  A given thickness with an sd becomes a nuisance
+parameter of every fit (:class:`ThicknessNuisance`).
 """
 
 from __future__ import annotations
 
-import hashlib
-import logging
 import math
-import os
-from dataclasses import dataclass, replace
-from pathlib import Path
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from skinsuction.measured._geometry import DEFAULT_LAYERS_MM, Geometry
+from skinsuction.measured import DEFAULT_LAYERS_MM, Geometry
 
 from ._causes import BASELINE
+from ._lagrange import LagrangeAxis
+from ._on_demand import OnDemandRays
+from ._ray_space import RaySpace
 
-log = logging.getLogger(__name__)
-
-__all__ = ["Geometry", "GeometryOutsideSpace", "OnDemandRays", "spaces_at", "ThicknessNuisance",
-           "DEFAULT_LAYERS_MM", "default_cache_dir", "window_nodes"]
+__all__ = ["GeometryOutsideSpace", "spaces_at", "ThicknessNuisance", "window_nodes",
+           "THICKNESS_RESOLUTION_MM"]
 
 #: Thicknesses are rounded to this (mm) before rays are solved for them: a
 #: measured thickness is not known better, and rounded geometries share a cache.
@@ -53,168 +46,8 @@ class GeometryOutsideSpace(ValueError):
     """A probe and layers the spaces do not cover (and no on-demand solver is allowed)."""
 
 
-def default_cache_dir() -> Path:
-    """Where on-demand rays are kept: ``$SKINSUCTION_CACHE`` or ``~/.cache/skinsuction``."""
-    env = os.environ.get("SKINSUCTION_CACHE")
-    if env:
-        return Path(env)
-    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "skinsuction"
-
-
-def _fe_code_hash() -> str:
-    """Hash of the FE model's and the ray solve's source: a change invalidates the cache."""
-    root = Path(__file__).resolve().parents[1]
-    files = sorted((root / "model").glob("*.py")) + [
-        root / "space" / n for n in ("_solve.py", "_ray_solve.py", "_rays.py", "_storage.py")]
-    h = hashlib.sha256()
-    for f in files:
-        h.update(f.name.encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()[:16]
-
-
 def _round_mm(x: float) -> float:
     return round(round(float(x) / THICKNESS_RESOLUTION_MM) * THICKNESS_RESOLUTION_MM, 6)
-
-
-class OnDemandRays:
-    """Neo-Hookean rays of one probe at one geometry, solved when first needed, cached.
-
-    Parameters
-    ----------
-    spec : RaySpec
-        The ray specification of the space they extend (ratio nodes, loads, mesh,
-        fallbacks): the rays are those the workflow would have run.
-    cache_dir : path-like, optional
-        Default :func:`default_cache_dir`; a subfolder per specification and FE code.
-    workers : int
-        Processes that solve the rays of one geometry.
-    progress : text stream or None
-        Where each solve is announced, with its time (default stderr): a
-        geometry's rays of every cause take minutes, and the user must see why.
-    """
-
-    def __init__(self, spec, cache_dir=None, workers: int = 1, progress="stderr"):
-        import json
-        import sys
-
-        self.spec = spec
-        self.workers = max(1, int(workers))
-        self.progress = sys.stderr if progress == "stderr" else progress
-        key = hashlib.sha256(json.dumps(spec.to_dict(), sort_keys=True).encode()
-                             + _fe_code_hash().encode()).hexdigest()[:16]
-        self.dir = Path(cache_dir or default_cache_dir()) / "rays" / key
-        self.solved = 0  # geometries solved by this object (not read from the cache)
-
-    def _ray_ids(self, probe_mm, t_d, t_h, cause=None, coordinate=None, ratio_nodes=None):
-        from ._rays import ray_id
-        from ._storage import round_sig
-
-        x1d = self.spec.x1d_ref
-        out = []
-        for r in self.spec.ratio_nodes if ratio_nodes is None else ratio_nodes:
-            params = {"probe_mm": probe_mm, "bottom": self.spec.bottom,
-                      "x1d": round_sig(x1d), "x1h": round_sig(r * x1d),
-                      "t_d": t_d, "t_h": t_h}
-            if cause is not None:
-                params.update({k: round_sig(v, 6) for k, v in
-                               cause.simulate_keywords(coordinate, x1d).items()})
-            out.append(ray_id(params))
-        return out
-
-    def rays(self, probe_mm: float, t_d: float, t_h: float, cause=None, ratio_nodes=None):
-        """``(rays (n_r, n_c, n_p) in mm, info)`` of one probe at one geometry.
-
-        ``cause=None``: the neo-Hookean rays (``n_c = 1``); a :class:`Cause`: its
-        rays at every one of its nodes (the neutral node is the neo-Hookean ray).
-        A thickness cause (``t_d``, ``t_h``) replaces that layer's thickness.
-        The rays are solved for the reference aperture of the dimensionless
-        geometry (2 mm, thicknesses ``t/a``) and scaled by ``a`` (geometric
-        similarity), so similar measurements share them.  ``ratio_nodes``: only
-        these X1h/X1d nodes of the specification (``n_r`` of them; default all);
-        the rays of other nodes solved later join the same cache file.
-        """
-        from ._storage import round_sig
-
-        nodes = self.spec.ratio_nodes if ratio_nodes is None else tuple(ratio_nodes)
-        if not set(nodes) <= set(self.spec.ratio_nodes):
-            raise ValueError(f"ratio nodes {nodes} are not nodes of the ray specification "
-                             f"{self.spec.ratio_nodes}")
-        a = probe_mm / 2
-        ref_td, ref_th = round_sig(t_d / a, 6), round_sig(t_h / a, 6)
-        if cause is None:
-            return self._read(ref_td, ref_th, a, None, None, nodes)
-        columns, infos = [], []
-        for c in cause.nodes:
-            if c == cause.neutral:
-                m, info = self._read(ref_td, ref_th, a, None, None, nodes)
-            else:
-                m, info = self._read(ref_td, ref_th, a, cause, c, nodes)
-            columns.append(m[:, 0])
-            infos.append(info)
-        info = {"cache": str(self.dir), "rays": sum(i["rays"] for i in infos),
-                "stopped_early": sum(i["stopped_early"] for i in infos)}
-        return np.stack(columns, axis=1), info
-
-    def _read(self, ref_td, ref_th, a, cause, c, nodes):
-        from ._storage import _read_parquet, round_sig
-
-        if cause is None:
-            path = self.dir / f"td{ref_td:g}_th{ref_th:g}.parquet"
-            coord = None
-        else:
-            # a thickness node is a length: it scales with the aperture like the layers
-            coord = round_sig(c / a, 6) if cause.geometric else c
-            path = self.dir / f"td{ref_td:g}_th{ref_th:g}__{cause.keyword}{coord:g}.parquet"
-        ids = self._ray_ids(2.0, ref_td, ref_th, cause, coord, nodes)
-        if not path.exists():
-            self._solve(path, ids, ref_td, ref_th)
-        frame, meta = _read_parquet(path)
-        solved = set(frame["ray_id"])
-        missing = [rid for rid in ids if rid not in solved]
-        if missing:  # other X1h/X1d nodes than those solved before: add them to the file
-            extra = path.with_name(f"{path.stem}.extra.parquet")
-            self._solve(extra, missing, ref_td, ref_th)
-            _merge_bundles([path, extra], path)
-            frame, meta = _read_parquet(path)
-        p = np.asarray(self.spec.pressures_mbar)
-        out = np.full((len(ids), 1, p.size), np.nan)
-        for i, rid in enumerate(ids):
-            g = frame[frame["ray_id"] == rid]
-            if len(g) != p.size:
-                raise RuntimeError(f"{path}: ray {rid} is missing or incomplete; delete the "
-                                   "file to solve it again")
-            out[i, 0] = g["deflection_mm"].to_numpy(float) * a
-        infos = meta.get("rays") or {}
-        stopped = sum(1 for rid in ids if not infos.get(rid, {}).get("converged", True))
-        return out, {"cache": str(path), "rays": len(ids), "stopped_early": stopped}
-
-    def _solve(self, path: Path, ids, td: float, th: float):
-        from ._ray_solve import compute_bundle
-
-        import time
-
-        log.info("solving %d FE rays on demand for t_d/a = %g, t_h/a = %g -> %s",
-                 len(ids), td, th, path)
-        start = time.perf_counter()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        args = (self.spec.pressures_mbar, self.spec.mesh, list(self.spec.fallback))
-        if self.workers > 1:
-            from concurrent.futures import ProcessPoolExecutor
-
-            parts = [ids[i::self.workers] for i in range(self.workers)]
-            tmp = [path.with_name(f"{path.stem}.part{i}.parquet") for i in range(len(parts))]
-            with ProcessPoolExecutor(self.workers) as pool:
-                list(pool.map(compute_bundle, parts, tmp, *[[a] * len(parts) for a in args]))
-            _merge_bundles(tmp, path)
-        else:
-            compute_bundle(ids, path, *args)
-        self.solved += 1
-        if self.progress is not None:
-            print(f"solved on demand: {len(ids)} FE rays for t_d/a = {td:g}, t_h/a = {th:g} "
-                  f"({path.stem}) in {time.perf_counter() - start:.0f} s; cached in {path.parent}",
-                  file=self.progress, flush=True)
 
 
 @dataclass(frozen=True)
@@ -255,25 +88,21 @@ class ThicknessNuisance:
         return self.keyword
 
     def thickness(self, delta):
-        """Thickness (mm) of an offset in sd units."""
+        """Thickness of an offset in sd units.
+
+        Parameters
+        ----------
+        delta : float or array_like
+            Offsets from :attr:`value`, in units of :attr:`sd`.
+
+        Returns
+        -------
+        float or ndarray
+            Thicknesses (mm).
+        """
         return self.value + np.asarray(delta, dtype=float) * self.sd
 
 
-def _merge_bundles(parts, path):
-    import pandas as pd
-
-    from ._storage import _read_parquet, _write_parquet
-
-    frames, meta = [], {}
-    for p in parts:
-        f, m = _read_parquet(p)
-        frames.append(f)
-        rays = {**meta.get("rays", {}), **m.get("rays", {})}
-        meta = {**m, "rays": rays}
-    _write_parquet(pd.concat(frames, ignore_index=True), path, meta)
-    for p in parts:
-        if Path(p) != Path(path):
-            Path(p).unlink(missing_ok=True)
 
 
 def _cause_effect(space, probe_mm: float):
@@ -282,8 +111,6 @@ def _cause_effect(space, probe_mm: float):
     Interpolated across the cause's probes (cubic Lagrange in log10 of the
     aperture); exactly 0 at the neutral coordinate; None outside its probes.
     """
-    from ._lagrange import LagrangeAxis
-
     probes = np.asarray(space.probes_mm, dtype=float)
     j0 = int(np.argmin(np.abs(np.asarray(space.coordinates) - space.cause.neutral)))
     effect = []
@@ -308,8 +135,22 @@ def _cause_effect(space, probe_mm: float):
 
 
 def window_nodes(nodes, window=None) -> tuple:
-    """The X1h/X1d nodes within ``window = (lo, hi)``, at least 4 (a cubic stencil).
+    """The X1h/X1d nodes within a window, at least 4 (a cubic stencil).
 
+    Parameters
+    ----------
+    nodes : sequence of float
+        The ascending X1h/X1d nodes of a ray specification.
+    window : (float, float), optional
+        ``(lo, hi)``; None: every node.
+
+    Returns
+    -------
+    tuple of float
+        The nodes inside, widened alternately up and down to at least 4.
+
+    Examples
+    --------
     >>> window_nodes([1e-4, 1e-3, 1e-2, 0.1, 1.0, 2.0], (0.005, 0.5))
     (0.001, 0.01, 0.1, 1.0)
     >>> window_nodes([1e-4, 1e-3, 1e-2, 0.1, 1.0], None)
@@ -330,6 +171,7 @@ def window_nodes(nodes, window=None) -> tuple:
     return nodes[i0:i1]
 
 
+
 def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays | None = None,
               solve_causes: bool = True, ratio_window=None):
     """The ray spaces of one measurement: every model at its probes and layers.
@@ -341,6 +183,7 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
     probes : iterable of float
         Apertures (mm) of the measurement.
     geometry : Geometry
+        The measurement's layer thicknesses, given or assumed, with their sd.
     on_demand : OnDemandRays, optional
         Solves the rays of a probe or geometry the space lacks; without it such a
         measurement raises :class:`GeometryOutsideSpace`.
@@ -381,105 +224,160 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
     ...
     skinsuction.space._geometry.GeometryOutsideSpace: no neo-Hookean rays of the 4 mm probe for ...
     """
-    from ._ray_space import RaySpace
-
-    probes = [float(p) for p in probes]
     base = spaces[BASELINE]
-    notes = []
+    at = _Measurement([float(p) for p in probes], geometry, base, on_demand)
+    rays = _neo_hookean_rays(at)
+    meta = {**base.metadata, "geometry": geometry.to_dict()}
+    out = {BASELINE: RaySpace(None, at.spec, np.array([math.nan]), rays, meta)}
+    own_brackets = set()  # causes solved at these layers: thickness brackets of their own
+    for name, space in spaces.items():
+        if name == BASELINE:
+            continue
+        cause = space.cause
+        if cause.geometric and cause.keyword in geometry.given:
+            at.notes.append(f"{name}: not a free cause, the {cause.symbol} is given "
+                            f"({getattr(geometry, cause.keyword):g} mm)")
+        elif at.default and all(space.has_probe(p) for p in at.probes):
+            out[name] = RaySpace(cause, at.spec, space.coordinates,
+                                 {p: space.rays(p) for p in at.probes}, space.metadata)
+        elif on_demand is not None and solve_causes:
+            out[name] = _solved_cause(name, space, at, ratio_window)
+            own_brackets.add(name)
+        else:
+            carried = _carried_cause(name, space, at, rays)
+            if carried is not None:
+                out[name] = carried
+    _attach_nuisances(out, own_brackets, at)
+    return out, at.notes
+
+
+@dataclass
+class _Measurement:
+    """What the spaces of one measurement are taken at, and the notes they gather.
+
+    ``layers``: the layers the rays are solved for (given ones rounded); ``spec``:
+    the ray specification at the measurement's probes."""
+
+    probes: list
+    geometry: Geometry
+    #: the space's neo-Hookean rays
+    base: RaySpace
+    on_demand: OnDemandRays | None
+    notes: list = field(default_factory=list)
+
+    def __post_init__(self):
+        self.layers = _rounded_layers(self.geometry, self.notes)
+        self.spec = replace(self.base.spec, probes_mm=tuple(self.probes))
+
+    @property
+    def default(self) -> bool:
+        return self.geometry.is_default
+
+    def where(self) -> str:
+        """The layers, for notes and errors."""
+        return f"t_d = {self.layers[0]:g}, t_h = {self.layers[1]:g} mm"
+
+
+def _rounded_layers(geometry: Geometry, notes: list) -> tuple:
+    """The layers the rays are solved for: given ones rounded to THICKNESS_RESOLUTION_MM."""
     t_d, t_h = geometry.t_d, geometry.t_h
     if not geometry.is_default:
         t_d, t_h = _round_mm(t_d), _round_mm(t_h)
         if abs(t_d - geometry.t_d) > 1e-9 or abs(t_h - geometry.t_h) > 1e-9:
             notes.append(f"thicknesses rounded to {THICKNESS_RESOLUTION_MM:g} mm for the FE "
                          f"rays: t_d = {t_d:g}, t_h = {t_h:g} mm")
-    default = geometry.is_default
-    rays, solved = {}, []
-    own_brackets = set()  # causes solved at these layers: thickness brackets of their own
-    for p in probes:
-        if default and base.has_probe(p):
+    return t_d, t_h
+
+
+def _neo_hookean_rays(at: _Measurement) -> dict:
+    """``{probe: rays}`` of the neo-Hookean model at the measurement's probes and layers:
+    the space's own where it has them, else solved on demand (noted)."""
+    base, rays, solved = at.base, {}, []
+    for p in at.probes:
+        if at.default and base.has_probe(p):
             rays[p] = base.rays(p)
             continue
-        if on_demand is None:
+        if at.on_demand is None:
             raise GeometryOutsideSpace(
-                f"no neo-Hookean rays of the {p:g} mm probe for t_d = {t_d:g}, t_h = {t_h:g} mm "
+                f"no neo-Hookean rays of the {p:g} mm probe for {at.where()} "
                 f"in the space (it has {', '.join(f'{q:g}' for q in base.probes_mm)} mm with "
                 "1 mm layers); allow solving them on demand")
-        rays[p], info = on_demand.rays(p, t_d, t_h)
+        rays[p], info = at.on_demand.rays(p, *at.layers)
         solved.append((p, info))
     for p, info in solved:
-        notes.append(f"neo-Hookean rays of the {p:g} mm probe at t_d = {t_d:g}, t_h = {t_h:g} mm"
-                     f" solved on demand ({info['rays']} FE rays, {info['stopped_early']} "
-                     f"stopped early; cached in {info['cache']})")
-    spec = replace(base.spec, probes_mm=tuple(probes))
-    meta = {**base.metadata, "geometry": geometry.to_dict()}
-    out = {BASELINE: RaySpace(None, spec, np.array([math.nan]), rays, meta)}
-    for name, space in spaces.items():
-        if name == BASELINE:
+        at.notes.append(f"neo-Hookean rays of the {p:g} mm probe at {at.where()}"
+                        f" solved on demand ({info['rays']} FE rays, {info['stopped_early']} "
+                        f"stopped early; cached in {info['cache']})")
+    return rays
+
+
+def _solved_cause(name: str, space: RaySpace, at: _Measurement, ratio_window) -> RaySpace:
+    """A cause's space at the measurement: its rays at these probes and layers, solved
+    on demand (its own where the space has them), at the X1h/X1d nodes of the window."""
+    full = at.base.spec.ratio_nodes
+    nodes = window_nodes(full, ratio_window)
+    keep = [full.index(r) for r in nodes]
+    arrays, n_rays, n_stopped = {}, 0, 0
+    for p in at.probes:
+        if at.default and space.has_probe(p):
+            arrays[p] = space.rays(p)[keep]
             continue
-        cause = space.cause
-        if cause.geometric and cause.keyword in geometry.given:
-            notes.append(f"{name}: not a free cause, the {cause.symbol} is given "
-                         f"({getattr(geometry, cause.keyword):g} mm)")
-            continue
-        if default and all(space.has_probe(p) for p in probes):
-            out[name] = RaySpace(cause, spec, space.coordinates,
-                                 {p: space.rays(p) for p in probes}, space.metadata)
-            continue
-        if on_demand is not None and solve_causes:
-            nodes = window_nodes(base.spec.ratio_nodes, ratio_window)
-            keep = [base.spec.ratio_nodes.index(r) for r in nodes]
-            arrays, n_rays, n_stopped = {}, 0, 0
-            for p in probes:
-                if default and space.has_probe(p):
-                    arrays[p] = space.rays(p)[keep]
-                    continue
-                arrays[p], info = on_demand.rays(p, t_d, t_h, cause, **_subset(nodes, base.spec.ratio_nodes))
-                n_rays += info["rays"]
-                n_stopped += info["stopped_early"]
-            window = ("" if len(nodes) == len(base.spec.ratio_nodes) else
-                      f", X1h/X1d {nodes[0]:g}-{nodes[-1]:g} only ({len(nodes)} of "
-                      f"{len(base.spec.ratio_nodes)} nodes)")
-            notes.append(f"{name}: its rays at this geometry solved on demand ({n_rays} FE "
-                         f"rays, {n_stopped} stopped early{window})")
-            out[name] = RaySpace(cause, replace(spec, ratio_nodes=nodes),
-                                 np.asarray(cause.nodes, dtype=float), arrays,
-                                 {**space.metadata, "geometry": geometry.to_dict()})
-            own_brackets.add(name)
-            continue
-        arrays = {}
-        for p in probes:
-            effect = _cause_effect(space, p)
-            if effect is None:
-                break
-            with np.errstate(divide="ignore", invalid="ignore"):
-                g = np.log(np.where(rays[p][..., 1:] > 0, rays[p][..., 1:], np.nan)) + effect
-            full = np.zeros(g.shape[:-1] + (g.shape[-1] + 1,))
-            full[..., 1:] = np.exp(g)
-            arrays[p] = full
-        if len(arrays) < len(probes):
-            notes.append(f"{name}: simulated for the {', '.join(f'{q:g}' for q in space.probes_mm)}"
-                         f" mm probes only, not {', '.join(f'{q:g}' for q in probes)} mm")
-            continue
-        where = []
-        if not default:
-            where.append(f"{DEFAULT_LAYERS_MM[0]:g} mm + {DEFAULT_LAYERS_MM[1]:g} mm layers")
-        if any(not space.has_probe(p) for p in probes):
-            where.append(f"the {', '.join(f'{q:g}' for q in space.probes_mm)} mm probes")
-        notes.append(f"{name}: its effect on the deflection was simulated for "
-                     f"{' and '.join(where)} and is carried over to this measurement "
-                     "(an approximation)")
-        out[name] = RaySpace(cause, spec, space.coordinates, arrays,
-                             {**space.metadata, "geometry": geometry.to_dict()})
-    nuisance = _nuisances(out[BASELINE], probes, geometry, (t_d, t_h), on_demand, notes)
+        arrays[p], info = at.on_demand.rays(p, *at.layers, space.cause, **_subset(nodes, full))
+        n_rays += info["rays"]
+        n_stopped += info["stopped_early"]
+    window = ("" if len(nodes) == len(full) else
+              f", X1h/X1d {nodes[0]:g}-{nodes[-1]:g} only ({len(nodes)} of "
+              f"{len(full)} nodes)")
+    at.notes.append(f"{name}: its rays at this geometry solved on demand ({n_rays} FE "
+                    f"rays, {n_stopped} stopped early{window})")
+    return RaySpace(space.cause, replace(at.spec, ratio_nodes=nodes),
+                    np.asarray(space.cause.nodes, dtype=float), arrays,
+                    {**space.metadata, "geometry": at.geometry.to_dict()})
+
+
+def _carried_cause(name: str, space: RaySpace, at: _Measurement, rays: dict):
+    """A cause's space at the measurement without its own rays there: its effect on
+    log M, where it was simulated, on the neo-Hookean ``rays`` (an approximation the
+    notes name); None (noted) if it was not simulated for apertures around these."""
+    arrays = {}
+    for p in at.probes:
+        effect = _cause_effect(space, p)
+        if effect is None:
+            break
+        with np.errstate(divide="ignore", invalid="ignore"):
+            g = np.log(np.where(rays[p][..., 1:] > 0, rays[p][..., 1:], np.nan)) + effect
+        full = np.zeros(g.shape[:-1] + (g.shape[-1] + 1,))
+        full[..., 1:] = np.exp(g)
+        arrays[p] = full
+    if len(arrays) < len(at.probes):
+        at.notes.append(f"{name}: simulated for the {', '.join(f'{q:g}' for q in space.probes_mm)}"
+                        f" mm probes only, not {', '.join(f'{q:g}' for q in at.probes)} mm")
+        return None
+    where = []
+    if not at.default:
+        where.append(f"{DEFAULT_LAYERS_MM[0]:g} mm + {DEFAULT_LAYERS_MM[1]:g} mm layers")
+    if any(not space.has_probe(p) for p in at.probes):
+        where.append(f"the {', '.join(f'{q:g}' for q in space.probes_mm)} mm probes")
+    at.notes.append(f"{name}: its effect on the deflection was simulated for "
+                    f"{' and '.join(where)} and is carried over to this measurement "
+                    "(an approximation)")
+    return RaySpace(space.cause, at.spec, space.coordinates, arrays,
+                    {**space.metadata, "geometry": at.geometry.to_dict()})
+
+
+def _attach_nuisances(out: dict, own_brackets: set, at: _Measurement) -> None:
+    """Give every space the thickness nuisances of the given layers with an sd: the
+    neo-Hookean brackets, or a cause's own where its rays were solved at these layers."""
+    nuisance = _nuisances(out[BASELINE], at.probes, at.geometry, at.layers, at.on_demand,
+                          at.notes)
     for name, space in out.items():
         space.nuisance = nuisance
         if nuisance and name in own_brackets:
-            space.nuisance = _nuisances(space, probes, geometry, (t_d, t_h), on_demand, [],
-                                        base.spec.ratio_nodes)
+            space.nuisance = _nuisances(space, at.probes, at.geometry, at.layers, at.on_demand,
+                                        [], at.base.spec.ratio_nodes)
     if nuisance and own_brackets:
-        notes.append(f"{', '.join(sorted(own_brackets))}: the thickness nuisance moves each "
-                     "cause's curve by its own rays at ±1 sd (solved on demand)")
-    return out, notes
+        at.notes.append(f"{', '.join(sorted(own_brackets))}: the thickness nuisance moves each "
+                        "cause's curve by its own rays at ±1 sd (solved on demand)")
 
 
 def _subset(nodes, full) -> dict:
@@ -491,8 +389,6 @@ def _subset(nodes, full) -> dict:
 def _nuisances(center, probes, geometry, layers, on_demand, notes, full_nodes=()) -> tuple:
     """A :class:`ThicknessNuisance` per given thickness with an sd (rays on demand):
     brackets of ``center``'s own model (neo-Hookean, or a cause at every node)."""
-    from ._ray_space import RaySpace
-
     cause = center.cause
     coordinates = np.array([math.nan]) if cause is None else np.asarray(cause.nodes, float)
     out = []

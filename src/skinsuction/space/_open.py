@@ -15,11 +15,13 @@ import numpy as np
 
 from skinsuction._files import file_sha256
 from skinsuction.errors import InputError
+from skinsuction.measured import Geometry
 
 from ._causes import BASELINE
-from ._geometry import Geometry, GeometryOutsideSpace, OnDemandRays, spaces_at
+from ._geometry import GeometryOutsideSpace, spaces_at
 from ._grid import read_space
 from ._interpolate import GriddedSpace
+from ._on_demand import OnDemandRays
 from ._ray_interpolate import NeoHookeanSlice
 from ._ray_space import read_ray_space, read_ray_spaces
 from ._shipped import resolve_space
