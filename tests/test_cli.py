@@ -70,11 +70,8 @@ def test_commands_registry_is_the_parser():
 
 # ------------------------------------------------------------------ simulate
 def fake_simulate(calls, converge=True):
-    def simulate(x1d, x1h, x2d, x2h, t_d, t_h, probe_mm, bottom, pressures_mbar=None, mesh=None,
-                 progress=None):
-        calls.append(dict(x1d=x1d, x1h=x1h, x2d=x2d, x2h=x2h, t_d=t_d, t_h=t_h,
-                          probe_mm=probe_mm, bottom=bottom, pressures_mbar=pressures_mbar,
-                          mesh=mesh))
+    def simulate(skin, probe, pressures_mbar=None, mesh=None, progress=None):
+        calls.append(dict(skin=skin, probe_mm=probe, pressures_mbar=pressures_mbar, mesh=mesh))
         p = np.arange(0.0, 101.0, 2.0)
         for k in range(1, p.size):
             progress(k, p.size - 1, p[k])
@@ -97,9 +94,12 @@ def test_simulate_prints_the_curve_with_the_solver_note(monkeypatch, capsys):
                           "--x2d", 0.5, "--th", 2, "--bottom", "axial", "--refinement", 0.5],
                          capsys)
     assert code == 0 and err == ""
-    assert calls == [dict(x1d=0.08, x1h=4.1e-4, x2d=0.5, x2h=0.0, t_d=1.0, t_h=2.0,
-                          probe_mm=2.0, bottom="axial", pressures_mbar=None,
-                          mesh={"refinement": 0.5})]
+    from skinsuction.model import Skin
+
+    (call,) = calls
+    assert call["skin"] == Skin.two_layer(0.08, 4.1e-4, x2d=0.5, t_h=2.0, bottom="axial")
+    assert call["probe_mm"] == 2.0 and call["mesh"] == {"refinement": 0.5}
+    np.testing.assert_array_equal(call["pressures_mbar"], np.arange(0.0, 101.0, 2.0))
     assert "# converged: true" in out and "# last_converged_mbar: 100" in out
     assert "# reason:" in out
     frame = pd.read_csv(io.StringIO(out), comment="#")
@@ -177,6 +177,9 @@ def test_simulate_stopped_early_exits_3_and_still_writes(monkeypatch, capsys, tm
     (["--probe", "6", "--x1d", "abc", "--x1h", "1e-4"], "--x1d"),
     (["--probe", "6", "--x1d", "0.08", "--x1h", "1e-4", "--bottom", "glued"], "--bottom"),
     (["--probe", "6", "--x1d", "0.08"], "--x1h"),
+    (["--probe", "6"], "--skin FILE or --x1d and --x1h"),
+    (["--probe", "6", "--skin", "s.yaml", "--x1d", "0.08"], "not both (--x1d)"),
+    (["--probe", "6", "--x1d", "0.08", "--x1h", "1e-4", "--max-mbar", "2000"], "max_mbar"),
     (["--probe", "6", "--x1d", "0.08", "--x1h", "1e-4", "--refinement", "50"], "--refinement"),
     (["--probe", "6", "--x1d", "0.08", "--x1h", "1e-4", "--refinement", "1e-6"], "--refinement"),
     (["--probe", "6", "--x1d", "0.08", "--x1h", "1e-4", "--refinement", "1.5"], "--refinement"),
@@ -185,6 +188,47 @@ def test_simulate_bad_arguments_exit_2(argv, word, capsys, monkeypatch):
     monkeypatch.setattr("skinsuction.model.simulate", fake_simulate([]))
     code, out, err = run(["simulate", *argv], capsys)
     assert code == 2 and word in err and "Traceback" not in err
+
+
+def test_simulate_takes_a_skin_file_with_three_layers(monkeypatch, capsys, tmp_path):
+    """--skin FILE: any stack; the header records the skin, the ramp is the options'."""
+    from skinsuction.model import Skin
+
+    skin = Skin.two_layer(0.08, 4.1e-4, t_d=0.9).with_layer_on_top("superficial", 0.1, 0.02)
+    path = skin.write(tmp_path / "skin.yaml")
+    calls = []
+    monkeypatch.setattr("skinsuction.model.simulate", fake_simulate(calls))
+    code, out, err = run(["simulate", "--probe", 2, "--skin", path, "--max-mbar", 450,
+                          "--step-mbar", 50, "--bottom", "free"], capsys)
+    assert code == 0 and err == ""
+    (call,) = calls
+    assert call["skin"] == Skin(skin.layers, "free")
+    assert call["pressures_mbar"].tolist() == list(range(0, 451, 50))
+    header = [line for line in out.splitlines() if line.startswith("# skin: ")]
+    assert Skin.from_dict(json.loads(header[0][len("# skin: "):])) == Skin(skin.layers, "free")
+    assert "# x1d_mpa" not in out and "# ramp_mbar: 0 to 450 by 50" in out
+
+
+def test_simulate_a_bad_skin_file_is_one_line_naming_it(capsys, tmp_path):
+    path = tmp_path / "skin.yaml"
+    path.write_text("layers: [{name: dermis, thickness: 1}]")
+    code, out, err = run(["simulate", "--probe", 2, "--skin", path], capsys)
+    assert code == 2 and err.count("\n") == 1
+    assert str(path) in err and "missing ['X1']" in err
+
+
+def test_simulate_a_three_layer_skin_end_to_end(capsys, tmp_path):
+    """The real model through the command line: a superficial layer softens M."""
+    from skinsuction.model import Skin
+
+    skin = Skin.two_layer(0.08, 4.1e-4, t_d=0.9).with_layer_on_top("superficial", 0.1, 0.02)
+    args = ["--probe", 2, "--max-mbar", 20, "--step-mbar", 10, "--refinement", 0.5]
+    code, three, _ = run(["simulate", "--skin", skin.write(tmp_path / "s.yaml"), *args], capsys)
+    code2, two, _ = run(["simulate", "--x1d", 0.08, "--x1h", 4.1e-4, *args], capsys)
+    assert code == code2 == 0
+    m3, m2 = (pd.read_csv(io.StringIO(t), comment="#")["deflection_mm"].iloc[-1]
+              for t in (three, two))
+    assert m3 > 1.05 * m2
 
 
 def test_simulate_model_refusal_is_one_line(monkeypatch, capsys):
@@ -388,3 +432,46 @@ def test_simulate_writes_the_measured_format_that_identify_reads(monkeypatch, ca
     data = load_measured(target)
     assert data.probes == (6.0,) and data.curve(6.0).pressure_mbar[-1] == 40.0
     assert data.metadata["x1d_mpa"] == "0.05"
+
+
+# ---------------------------------------------------------------- export-inp
+def test_export_inp_writes_the_deck_of_a_skin_file(capsys, tmp_path):
+    """The deck of a three-layer skin: one material per layer, every ramp pressure a
+    step; it says on stderr what it leaves out. With CalculiX on PATH (required in CI)
+    the deck runs and agrees with this model without the wall."""
+    import os
+
+    from skinsuction.model import Skin, SuctionTest, read_dat
+
+    skin = Skin.two_layer(0.08, 4.1e-4, t_d=0.9).with_layer_on_top("superficial", 0.1, 0.02)
+    out = tmp_path / "suction.inp"
+    code, _, err = run(["export-inp", "--probe", 2, "--skin", skin.write(tmp_path / "s.yaml"),
+                        "--max-mbar", 40, "--step-mbar", 20, "--refinement", 0.5,
+                        "--out", out], capsys)
+    assert code == 0 and "probe wall" in err and str(out) in err
+    deck = out.read_text()
+    assert deck.count("*MATERIAL") == 3 and deck.count("*STEP") == 2
+    ccx = shutil.which("ccx")
+    if ccx is None and os.environ.get("SKINSUCTION_REQUIRE_CCX") != "1":
+        return
+    run_dir = tmp_path / "ccx"
+    run_dir.mkdir()
+    (run_dir / "suction.inp").write_text(deck)
+    subprocess.run([ccx or "ccx", "suction"], cwd=run_dir, capture_output=True, check=True,
+                   timeout=600)
+    p, m = read_dat(run_dir / "suction.dat")
+    ours = SuctionTest(skin, 2, {"refinement": 0.5, "probe_wall": False}).run([0.0, 20.0, 40.0])
+    np.testing.assert_allclose(np.interp([20.0, 40.0], p, m), ours.deflection_mm[1:],
+                               rtol=3e-3)
+
+
+def test_export_inp_refuses_a_prestretched_skin_in_one_line(capsys, tmp_path):
+    code, _, err = run(["export-inp", "--probe", 2, "--x1d", 0.08, "--x1h", 4e-4,
+                        "--out", tmp_path / "d.inp"], capsys)
+    assert code == 0
+    skin = tmp_path / "s.yaml"
+    skin.write_text("layers: [{name: dermis, thickness: 1, X1: 0.08, prestretch: 1.05}]")
+    code, _, err = run(["export-inp", "--probe", 2, "--skin", skin, "--out",
+                        tmp_path / "e.inp"], capsys)
+    assert code == 2 and err.count("\n") == 1 and "pre-stretch" in err
+    assert not (tmp_path / "e.inp").exists()

@@ -47,6 +47,7 @@ from skinsuction.commands import (
     CLIError,
     check_config,
     diagnose,
+    export_inp,
     identify,
     rparams,
     simulate,
@@ -109,6 +110,7 @@ COMMANDS = {
         Command.of("study", study),
         Command.of("rparams", rparams),
         Command.of("check-config", check_config),
+        Command.of("export-inp", export_inp),
     )
 }
 

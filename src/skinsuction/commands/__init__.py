@@ -1,7 +1,7 @@
 """The subcommands of ``skinsuction``, one module each.
 
-Every module (``simulate``, ``identify``, ``diagnose``, ``study``, ``rparams``,
-``check_config``) has ``HELP`` and ``DESCRIPTION`` (its ``--help`` texts),
+Every module (``simulate``, ``export_inp``, ``identify``, ``diagnose``, ``study``,
+``rparams``, ``check_config``) has ``HELP`` and ``DESCRIPTION`` (its ``--help`` texts),
 ``add_arguments(parser)`` and ``run(args) -> int`` (the exit code); the registry
 of :mod:`skinsuction.cli` names them.  What they share (exit codes, the
 one-line :class:`CLIError`, formatting, and every
@@ -18,8 +18,8 @@ Examples
 >>> from skinsuction.commands import simulate
 >>> p = argparse.ArgumentParser()
 >>> simulate.add_arguments(p)
->>> p.parse_args(["--probe", "6", "--x1d", "0.08", "--x1h", "4.1e-4"]).bottom
-'fixed'
+>>> p.parse_args(["--probe", "6", "--x1d", "0.08", "--x1h", "4.1e-4"]).max_mbar
+100.0
 """
 
 from ._common import (
@@ -31,5 +31,5 @@ from ._common import (
     CLIError,
 )
 
-__all__ = ["check_config", "diagnose", "identify", "rparams", "simulate", "study", "CLIError",
+__all__ = ["check_config", "diagnose", "export_inp", "identify", "rparams", "simulate", "study", "CLIError",
            "EXIT_OK", "EXIT_INTERNAL", "EXIT_INPUT", "EXIT_NOT_CONVERGED", "EXIT_INTERRUPTED"]

@@ -8,6 +8,7 @@ solves a skin under a probe for M(p).
 from ._curve import Curve, ParameterError
 from ._fast import SWAP, FastAssembly, material_response
 from ._geometry import MeshSettings, edge_fan, layer_breaks, suction_mesh
+from ._inp import inp_deck, read_dat, run_calculix, write_inp
 from ._material import SkinLayers, bulk_modulus, prestress, thickness_stretch
 from ._prony import Prony
 from ._simulate import (
@@ -35,11 +36,15 @@ __all__ = [
     "SuctionTest",
     "bulk_modulus",
     "edge_fan",
+    "inp_deck",
     "layer_breaks",
     "layer_prestretch",
     "material_response",
     "prestress",
+    "read_dat",
+    "run_calculix",
     "thickness_stretch",
     "simulate",
     "suction_mesh",
+    "write_inp",
 ]
