@@ -700,7 +700,7 @@ class _WindowSolver:
     def __init__(self, spaces):
         self.spaces, self.asked = spaces, []
 
-    def rays(self, probe, t_d, t_h, cause=None, ratio_nodes=None):
+    def rays(self, probe, layers, cause=None, ratio_nodes=None):
         s = self.spaces[BASELINE if cause is None else cause.name]
         nodes = s.spec.ratio_nodes if ratio_nodes is None else tuple(ratio_nodes)
         keep = [s.spec.ratio_nodes.index(r) for r in nodes]

@@ -120,7 +120,7 @@ def test_a_cause_carried_to_other_layers_is_its_effect_on_their_rays():
     spaces = _toy_spaces()
 
     class Solver:  # stands in for the FE: the 1 mm rays times 1.7
-        def rays(self, p, t_d, t_h):
+        def rays(self, p, layers):
             return spaces[BASELINE].rays(p) * 1.7, {"rays": 2, "stopped_early": 0, "cache": "-"}
 
     g = Geometry(1.3, 1.0, given=("t_d",))
@@ -137,7 +137,7 @@ def test_a_cause_at_an_aperture_between_its_probes_is_interpolated_in_log_apertu
     spaces = _toy_spaces()
 
     class Solver:
-        def rays(self, p, t_d, t_h):
+        def rays(self, p, layers):
             return spaces[BASELINE].rays(4.0) * (p / 4), {"rays": 2, "stopped_early": 0,
                                                           "cache": "-"}
 
@@ -156,7 +156,8 @@ def test_at_given_layers_each_cause_gets_its_own_rays_solved_on_demand():
     asked = []
 
     class Solver:  # stands in for the FE: a cause's rays depend on the layers
-        def rays(self, p, t_d, t_h, cause=None):
+        def rays(self, p, layers, cause=None):
+            t_d, t_h = layers["dermis.thickness"], layers["hypodermis.thickness"]
             asked.append((p, t_d, t_h, None if cause is None else cause.name))
             base = spaces[BASELINE].rays(p) * t_d
             if cause is None:
@@ -189,8 +190,8 @@ def test_a_given_thickness_sd_is_a_nuisance_the_fit_recovers():
         return base[6.0] * (1 + 0.8 * (t_d - 1.3) * np.sin(np.pi * q))
 
     class Solver:
-        def rays(self, p, t_d, t_h, cause=None):
-            return layered(p, t_d), {"rays": 2, "stopped_early": 0, "cache": "-"}
+        def rays(self, p, layers, cause=None):
+            return layered(p, layers["dermis.thickness"]), {"rays": 2, "stopped_early": 0, "cache": "-"}
 
     g = Geometry(1.3, 1.0, given=("t_d",), sd={"t_d": 0.1})
     out, notes = spaces_at({BASELINE: spaces[BASELINE]}, [6.0], g, Solver())
@@ -229,9 +230,9 @@ def _pre_tension_at_given_dermis():
                                                   * (1 - 8 * (c - 1))))
 
     class Solver:
-        def rays(self, p, t_d, t_h, cause=None):
+        def rays(self, p, layers, cause=None):
             c = [1.0] if cause is None else nodes
-            return layered(t_d, c), {"rays": 2 * len(c), "stopped_early": 0, "cache": "-"}
+            return layered(layers["dermis.thickness"], c), {"rays": 2 * len(c), "stopped_early": 0, "cache": "-"}
 
     spaces = {BASELINE: RaySpace(None, spec, np.array([np.nan]), {6.0: base}),
               "pre_tension": RaySpace(pre, spec, nodes, {6.0: layered(1.0, nodes)})}
@@ -285,13 +286,18 @@ SPEC = RaySpec([2, 6], [0.02, 0.2], load_max=10000, load_steps=5, x1d_ref=0.01,
                mesh={"refinement": 0.5})
 
 
+def _layers(t_d, t_h):
+    """The layers of rays on demand, by parameter path."""
+    return {"dermis.thickness": t_d, "hypodermis.thickness": t_h}
+
+
 @pytest.fixture(scope="module")
 def solver(tmp_path_factory):
     return OnDemandRays(SPEC, cache_dir=tmp_path_factory.mktemp("cache"))
 
 
 def test_rays_on_demand_are_the_fe_model_at_that_probe_and_layers(solver):
-    rays, info = solver.rays(4.0, 1.5, 3.0)
+    rays, info = solver.rays(4.0, _layers(1.5, 3.0))
     assert rays.shape == (2, 1, len(SPEC.pressures_mbar)) and info["rays"] == 2
     p = np.asarray(SPEC.pressures_mbar)
     for i, r in enumerate(SPEC.ratio_nodes):
@@ -307,15 +313,15 @@ def test_a_causes_rays_on_demand_are_the_fe_model_at_its_nodes_and_those_layers(
     pre = Cause("pre_tension", "prestretch", "lambda0", "1", False, 1.0, (1.0, 1.1))
     thick = Cause("hypodermis_thickness", "t_h", "t_h", "mm", False, 1.0, (1.0, 2.4))
     p = np.asarray(SPEC.pressures_mbar)
-    rays, info = solver.rays(4.0, 1.5, 3.0, pre)
+    rays, info = solver.rays(4.0, _layers(1.5, 3.0), pre)
     assert rays.shape == (2, 2, p.size) and info["rays"] == 4
-    neutral, _ = solver.rays(4.0, 1.5, 3.0)
+    neutral, _ = solver.rays(4.0, _layers(1.5, 3.0))
     assert np.array_equal(rays[:, :1], neutral)  # the neutral node is the neo-Hookean ray
     c = simulate(Skin.two_layer(0.01, 0.01 * SPEC.ratio_nodes[1], t_d=1.5, t_h=3.0, prestretch=1.1), probe=4.0, pressures_mbar=p, mesh={"refinement": 0.5})
     m = np.asarray(c.deflection_mm)
     assert np.allclose(rays[1, 1, :m.size], m, rtol=1e-9, atol=1e-12)
     # a thickness cause replaces that layer, scaled with the aperture like the others
-    rays, _ = solver.rays(4.0, 1.5, 3.0, thick)
+    rays, _ = solver.rays(4.0, _layers(1.5, 3.0), thick)
     c = simulate(Skin.two_layer(0.01, 0.01 * SPEC.ratio_nodes[0], t_d=1.5, t_h=2.4), probe=4.0, pressures_mbar=p, mesh={"refinement": 0.5})
     m = np.asarray(c.deflection_mm)
     assert np.allclose(rays[0, 1, :m.size], m, rtol=1e-9, atol=1e-12)
@@ -323,10 +329,27 @@ def test_a_causes_rays_on_demand_are_the_fe_model_at_its_nodes_and_those_layers(
 
 def test_similar_geometries_share_the_cached_rays(solver):
     solved = solver.solved
-    a, _ = solver.rays(4.0, 1.5, 3.0)
-    b, info = solver.rays(8.0, 3.0, 6.0)  # the same t/a: read from the cache, scaled
+    a, _ = solver.rays(4.0, _layers(1.5, 3.0))
+    b, info = solver.rays(8.0, _layers(3.0, 6.0))  # the same t/a: read from the cache, scaled
     assert solver.solved == solved and Path(info["cache"]).exists()
     assert np.allclose(b, 2 * a, rtol=1e-15)
+    # a skin gives its layers (the moduli are the rays' to span): the same cached rays
+    c, _ = solver.rays(4.0, Skin.two_layer(0.05, 1e-3, t_d=1.5, t_h=3.0))
+    assert solver.solved == solved and np.array_equal(c, a)
+
+
+def test_the_layers_of_rays_are_named_by_path():
+    from skinsuction.space import layer_thicknesses
+
+    assert layer_thicknesses(Skin.two_layer(0.05, 1e-3, t_d=1.5, t_h=3)) == _layers(1.5, 3.0)
+    with pytest.raises(ValueError, match="missing"):
+        layer_thicknesses({"dermis.thickness": 1.5})
+    with pytest.raises(ValueError, match="unknown"):
+        layer_thicknesses({**_layers(1.5, 3.0), "t_d": 1.0})
+    with pytest.raises(ValueError, match="positive"):
+        layer_thicknesses(_layers(1.5, -3.0))
+    with pytest.raises(ValueError, match="dermis over a hypodermis"):
+        layer_thicknesses(Skin.two_layer(0.05, 1e-3).with_layer_on_top("superficial", 0.1, 0.02))
 
 
 def test_a_window_of_nodes_is_solved_alone_and_the_rest_joins_its_cache_later(tmp_path):
@@ -334,9 +357,9 @@ def test_a_window_of_nodes_is_solved_alone_and_the_rest_joins_its_cache_later(tm
 
     log = io.StringIO()
     solver = OnDemandRays(SPEC, cache_dir=tmp_path, progress=log)
-    part, info = solver.rays(4.0, 1.3, 2.0, ratio_nodes=(0.2,))
+    part, info = solver.rays(4.0, _layers(1.3, 2.0), ratio_nodes=(0.2,))
     assert part.shape == (1, 1, len(SPEC.pressures_mbar)) and info["rays"] == 1
-    whole, info = solver.rays(4.0, 1.3, 2.0)
+    whole, info = solver.rays(4.0, _layers(1.3, 2.0))
     assert info["rays"] == 2 and np.array_equal(whole[1:], part)
     # the second ask solved the missing node alone, into the same file
     assert [line.split(":")[1].split("FE")[0].strip() for line in log.getvalue().splitlines()] \
@@ -346,10 +369,10 @@ def test_a_window_of_nodes_is_solved_alone_and_the_rest_joins_its_cache_later(tm
     c = simulate(Skin.two_layer(0.01, 0.01 * SPEC.ratio_nodes[0], t_d=1.3, t_h=2.0), probe=4.0, pressures_mbar=p, mesh={"refinement": 0.5})
     m = np.asarray(c.deflection_mm)
     assert np.allclose(whole[0, 0, :m.size], m, rtol=1e-9, atol=1e-12)
-    solver.rays(4.0, 1.3, 2.0, ratio_nodes=(0.02,))  # in the cache now: nothing solved
+    solver.rays(4.0, _layers(1.3, 2.0), ratio_nodes=(0.02,))  # in the cache now: nothing solved
     assert solver.solved == 2
     with pytest.raises(ValueError, match="not nodes of the ray specification"):
-        solver.rays(4.0, 1.3, 2.0, ratio_nodes=(0.05,))
+        solver.rays(4.0, _layers(1.3, 2.0), ratio_nodes=(0.05,))
 
 
 def test_a_causes_fit_starts_from_the_neo_hookean_one_with_the_thickness_in_its_place():

@@ -64,7 +64,7 @@ from ._grid import (
 )
 from ._interpolate import GriddedSpace, SpaceInterpolant, evaluate, interpolate_pressure
 from ._lagrange import LagrangeAxis
-from ._on_demand import OnDemandRays, default_cache_dir
+from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
 from ._open import LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
 from ._ray_solve import build_ray_spaces, compute_bundle, compute_ray
@@ -111,6 +111,7 @@ from ._shipped_check import (
 from ._solve import compute_point, solve_with_fallbacks
 from ._storage import (
     AXES,
+    AXIS_PATHS,
     BOTTOMS,
     COLUMNS,
     DEFAULTS,
@@ -137,7 +138,7 @@ __all__ = [
     "shipped_check_applies", "compare_ray_spaces", "knife_edge_rays", "check_shipped_space",
     "ShippedSpaceMismatch", "ship_space", "SHIPPED_RTOL", "SHIPPED_ATOL_MM",
     # storage
-    "AXES", "BOTTOMS", "COLUMNS", "DEFAULTS", "METADATA_KEY", "POINT_ID_PATTERN",
+    "AXES", "AXIS_PATHS", "BOTTOMS", "COLUMNS", "DEFAULTS", "METADATA_KEY", "POINT_ID_PATTERN",
     "SIGNIFICANT_DIGITS", "SPEC_KEYS", "CorruptCurveError", "curve_frame", "parse_point_id",
     "point_id", "read_curve", "read_curves", "round_sig", "write_curve",
     "atomic_output", "write_table",
@@ -158,5 +159,5 @@ __all__ = [
     # every probe and the subject's layers
     "DEFAULT_LAYERS_MM", "Geometry", "GeometryOutsideSpace", "OnDemandRays",
     "default_cache_dir", "spaces_at", "ThicknessNuisance", "window_nodes",
-    "THICKNESS_RESOLUTION_MM",
+    "THICKNESS_RESOLUTION_MM", "LAYER_PATHS", "layer_thicknesses",
 ]

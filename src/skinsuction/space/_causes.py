@@ -32,6 +32,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ._storage import AXIS_PATHS
+
 __all__ = ["Cause", "NONE", "BASELINE", "registry_from_config", "default_registry",
            "DEFAULT_CAUSES"]
 
@@ -49,10 +51,7 @@ GEOMETRY_KEYWORDS = ("t_d", "t_h")
 #: The parameter paths of the skin (:class:`skinsuction.model.Skin`) that a
 #: cause's keyword frees: the one place the two-layer keywords meet the skin.
 KEYWORD_PATHS = {
-    "x2d": ("dermis.X2",),
-    "x2h": ("hypodermis.X2",),
-    "t_d": ("dermis.thickness",),
-    "t_h": ("hypodermis.thickness",),
+    **{key: (AXIS_PATHS[key],) for key in ("x2d", "x2h", "t_d", "t_h")},
     "prestretch": ("dermis.prestretch", "hypodermis.prestretch"),
 }
 

@@ -33,6 +33,7 @@ from ._causes import BASELINE
 from ._lagrange import LagrangeAxis
 from ._on_demand import OnDemandRays
 from ._ray_space import RaySpace
+from ._storage import AXIS_PATHS
 
 __all__ = ["GeometryOutsideSpace", "spaces_at", "ThicknessNuisance", "window_nodes",
            "THICKNESS_RESOLUTION_MM"]
@@ -255,8 +256,9 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
 class _Measurement:
     """What the spaces of one measurement are taken at, and the notes they gather.
 
-    ``layers``: the layers the rays are solved for (given ones rounded); ``spec``:
-    the ray specification at the measurement's probes."""
+    ``layers``: the layers the rays are solved for (given ones rounded), by
+    parameter path (``{"dermis.thickness": mm, "hypodermis.thickness": mm}``);
+    ``spec``: the ray specification at the measurement's probes."""
 
     probes: list
     geometry: Geometry
@@ -275,18 +277,20 @@ class _Measurement:
 
     def where(self) -> str:
         """The layers, for notes and errors."""
-        return f"t_d = {self.layers[0]:g}, t_h = {self.layers[1]:g} mm"
+        return (f"t_d = {self.layers[AXIS_PATHS['t_d']]:g}, "
+                f"t_h = {self.layers[AXIS_PATHS['t_h']]:g} mm")
 
 
-def _rounded_layers(geometry: Geometry, notes: list) -> tuple:
-    """The layers the rays are solved for: given ones rounded to THICKNESS_RESOLUTION_MM."""
+def _rounded_layers(geometry: Geometry, notes: list) -> dict:
+    """The layers the rays are solved for, by parameter path: given ones rounded to
+    THICKNESS_RESOLUTION_MM."""
     t_d, t_h = geometry.t_d, geometry.t_h
     if not geometry.is_default:
         t_d, t_h = _round_mm(t_d), _round_mm(t_h)
         if abs(t_d - geometry.t_d) > 1e-9 or abs(t_h - geometry.t_h) > 1e-9:
             notes.append(f"thicknesses rounded to {THICKNESS_RESOLUTION_MM:g} mm for the FE "
                          f"rays: t_d = {t_d:g}, t_h = {t_h:g} mm")
-    return t_d, t_h
+    return {AXIS_PATHS["t_d"]: t_d, AXIS_PATHS["t_h"]: t_h}
 
 
 def _neo_hookean_rays(at: _Measurement) -> dict:
@@ -302,7 +306,7 @@ def _neo_hookean_rays(at: _Measurement) -> dict:
                 f"no neo-Hookean rays of the {p:g} mm probe for {at.where()} "
                 f"in the space (it has {', '.join(f'{q:g}' for q in base.probes_mm)} mm with "
                 "1 mm layers); allow solving them on demand")
-        rays[p], info = at.on_demand.rays(p, *at.layers)
+        rays[p], info = at.on_demand.rays(p, at.layers)
         solved.append((p, info))
     for p, info in solved:
         at.notes.append(f"neo-Hookean rays of the {p:g} mm probe at {at.where()}"
@@ -322,7 +326,7 @@ def _solved_cause(name: str, space: RaySpace, at: _Measurement, ratio_window) ->
         if at.default and space.has_probe(p):
             arrays[p] = space.rays(p)[keep]
             continue
-        arrays[p], info = at.on_demand.rays(p, *at.layers, space.cause, **_subset(nodes, full))
+        arrays[p], info = at.on_demand.rays(p, at.layers, space.cause, **_subset(nodes, full))
         n_rays += info["rays"]
         n_stopped += info["stopped_early"]
     window = ("" if len(nodes) == len(full) else
@@ -388,11 +392,12 @@ def _subset(nodes, full) -> dict:
 
 def _nuisances(center, probes, geometry, layers, on_demand, notes, full_nodes=()) -> tuple:
     """A :class:`ThicknessNuisance` per given thickness with an sd (rays on demand):
-    brackets of ``center``'s own model (neo-Hookean, or a cause at every node)."""
+    brackets of ``center``'s own model (neo-Hookean, or a cause at every node) at
+    ``layers`` (by path) with that thickness moved by -1 and +1 sd."""
     cause = center.cause
     coordinates = np.array([math.nan]) if cause is None else np.asarray(cause.nodes, float)
     out = []
-    for i, key in enumerate(("t_d", "t_h")):
+    for key in ("t_d", "t_h"):
         sd = (geometry.sd or {}).get(key)
         if key not in geometry.given or not sd:
             continue
@@ -400,14 +405,13 @@ def _nuisances(center, probes, geometry, layers, on_demand, notes, full_nodes=()
             notes.append(f"the {key} sd ({sd:g} mm) is not used: its rays would be solved on "
                          "demand, which is not allowed")
             continue
-        value = layers[i]
+        value = layers[AXIS_PATHS[key]]
         brackets = []
         for t in (value - sd, value + sd):
             t = max(_round_mm(t), THICKNESS_RESOLUTION_MM)
-            other = list(layers)
-            other[i] = t
-            rays = {p: on_demand.rays(p, *other, cause, **_subset(center.spec.ratio_nodes,
-                                                                   full_nodes))[0]
+            other = {**layers, AXIS_PATHS[key]: t}
+            rays = {p: on_demand.rays(p, other, cause, **_subset(center.spec.ratio_nodes,
+                                                                  full_nodes))[0]
                     for p in probes}
             brackets.append(RaySpace(cause, center.spec, coordinates, rays,
                                      {**center.metadata, key: t}))

@@ -20,14 +20,74 @@ from __future__ import annotations
 
 import hashlib
 import logging
+import math
 import os
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
 
+from ._rays import _ray_params, ray_id
+from ._storage import AXIS_PATHS, _read_parquet, _write_parquet, round_sig
+
 log = logging.getLogger(__name__)
 
-__all__ = ["OnDemandRays", "default_cache_dir"]
+__all__ = ["OnDemandRays", "default_cache_dir", "layer_thicknesses", "LAYER_PATHS"]
+
+#: The layers rays are solved for, by parameter path (the paper's two layers).
+LAYER_PATHS = (AXIS_PATHS["t_d"], AXIS_PATHS["t_h"])
+#: The ray-id keyword (a grid axis) of each layer path.
+_LAYER_KEYWORDS = {AXIS_PATHS[key]: key for key in ("t_d", "t_h")}
+
+
+def layer_thicknesses(layers) -> dict:
+    """The layer thicknesses rays are solved for, by parameter path.
+
+    Parameters
+    ----------
+    layers : Skin or mapping
+        A dermis over a hypodermis (:class:`skinsuction.model.Skin`; only its
+        thicknesses are read), or ``{"dermis.thickness": mm,
+        "hypodermis.thickness": mm}``.
+
+    Returns
+    -------
+    dict
+        ``{"dermis.thickness": mm, "hypodermis.thickness": mm}`` (floats).
+
+    Raises
+    ------
+    ValueError
+        For another stack of layers, a missing or unknown path, or a thickness
+        that is not a positive number.
+
+    Examples
+    --------
+    >>> layer_thicknesses({"dermis.thickness": 1.3, "hypodermis.thickness": 3})
+    {'dermis.thickness': 1.3, 'hypodermis.thickness': 3.0}
+    """
+    if isinstance(layers, Mapping):
+        unknown = sorted(set(layers) - set(LAYER_PATHS))
+        missing = [p for p in LAYER_PATHS if p not in layers]
+        if unknown or missing:
+            raise ValueError(f"the layers of rays are {list(LAYER_PATHS)}; "
+                             f"missing {missing}, unknown {unknown}")
+        out = {path: float(layers[path]) for path in LAYER_PATHS}
+    else:
+        names = tuple(getattr(layers, "names", ()))
+        if names != ("dermis", "hypodermis"):
+            raise ValueError(f"rays are solved for a dermis over a hypodermis, not the "
+                             f"layers {list(names) or layers!r}")
+        out = {path: float(layers.get(path)) for path in LAYER_PATHS}
+    for path, value in out.items():
+        if not (math.isfinite(value) and value > 0):
+            raise ValueError(f"{path} must be a positive number of mm, not {value!r}")
+    return out
+
+
+def _keywords(layers: dict) -> dict:
+    """``{"t_d": mm, "t_h": mm}``: the ray-id keywords of layers by path."""
+    return {_LAYER_KEYWORDS[path]: value for path, value in layers.items()}
 
 
 def default_cache_dir() -> Path:
@@ -87,75 +147,83 @@ class OnDemandRays:
         self.dir = Path(cache_dir or default_cache_dir()) / "rays" / key
         self.solved = 0  # geometries solved by this object (not read from the cache)
 
-    def _ray_ids(self, probe_mm, t_d, t_h, cause=None, coordinate=None, ratio_nodes=None):
-        from ._rays import ray_id
-        from ._storage import round_sig
+    def _ray_ids(self, probe_mm, layers, cause=None, coordinate=None, ratio_nodes=None):
+        """The ids of the rays at ``layers`` (by path), one per X1h/X1d node."""
+        nodes = self.spec.ratio_nodes if ratio_nodes is None else ratio_nodes
+        return [ray_id(_ray_params(self.spec, probe_mm, r, cause, coordinate,
+                                   _keywords(layers), digits=6)) for r in nodes]
 
-        x1d = self.spec.x1d_ref
-        out = []
-        for r in self.spec.ratio_nodes if ratio_nodes is None else ratio_nodes:
-            params = {"probe_mm": probe_mm, "bottom": self.spec.bottom,
-                      "x1d": round_sig(x1d), "x1h": round_sig(r * x1d),
-                      "t_d": t_d, "t_h": t_h}
-            if cause is not None:
-                params.update({k: round_sig(v, 6) for k, v in
-                               cause.simulate_keywords(coordinate, x1d).items()})
-            out.append(ray_id(params))
-        return out
+    def rays(self, probe_mm: float, layers, cause=None, ratio_nodes=None):
+        """The rays of one probe at one geometry.
 
-    def rays(self, probe_mm: float, t_d: float, t_h: float, cause=None, ratio_nodes=None):
-        """``(rays (n_r, n_c, n_p) in mm, info)`` of one probe at one geometry.
-
-        ``cause=None``: the neo-Hookean rays (``n_c = 1``); a :class:`Cause`: its
-        rays at every one of its nodes (the neutral node is the neo-Hookean ray).
-        A thickness cause (``t_d``, ``t_h``) replaces that layer's thickness.
         The rays are solved for the reference aperture of the dimensionless
         geometry (2 mm, thicknesses ``t/a``) and scaled by ``a`` (geometric
-        similarity), so similar measurements share them.  ``ratio_nodes``: only
-        these X1h/X1d nodes of the specification (``n_r`` of them; default all);
-        the rays of other nodes solved later join the same cache file.
-        """
-        from ._storage import round_sig
+        similarity), so similar measurements share them.
 
+        Parameters
+        ----------
+        probe_mm : float
+            Aperture diameter ``2 a`` (mm).
+        layers : Skin or mapping
+            The layers: a dermis over a hypodermis (only its thicknesses are read),
+            or ``{"dermis.thickness": mm, "hypodermis.thickness": mm}``
+            (:func:`layer_thicknesses`).
+        cause : Cause, optional
+            None: the neo-Hookean rays (``n_c = 1``); a cause: its rays at every
+            one of its nodes (the neutral node is the neo-Hookean ray).  A
+            thickness cause replaces that layer's thickness.
+        ratio_nodes : sequence of float, optional
+            Only these X1h/X1d nodes of the specification (``n_r`` of them;
+            default all); the rays of other nodes solved later join the same
+            cache file.
+
+        Returns
+        -------
+        rays : ndarray, shape (n_r, n_c, n_p)
+            Deflections (mm) at the specification's pressures.
+        info : dict
+            ``cache`` (where they are kept), ``rays`` (how many), ``stopped_early``.
+        """
         nodes = self.spec.ratio_nodes if ratio_nodes is None else tuple(ratio_nodes)
         if not set(nodes) <= set(self.spec.ratio_nodes):
             raise ValueError(f"ratio nodes {nodes} are not nodes of the ray specification "
                              f"{self.spec.ratio_nodes}")
         a = probe_mm / 2
-        ref_td, ref_th = round_sig(t_d / a, 6), round_sig(t_h / a, 6)
+        ref = {path: round_sig(t / a, 6) for path, t in layer_thicknesses(layers).items()}
         if cause is None:
-            return self._read(ref_td, ref_th, a, None, None, nodes)
+            return self._read(ref, a, None, None, nodes)
         columns, infos = [], []
         for c in cause.nodes:
             if c == cause.neutral:
-                m, info = self._read(ref_td, ref_th, a, None, None, nodes)
+                m, info = self._read(ref, a, None, None, nodes)
             else:
-                m, info = self._read(ref_td, ref_th, a, cause, c, nodes)
+                m, info = self._read(ref, a, cause, c, nodes)
             columns.append(m[:, 0])
             infos.append(info)
         info = {"cache": str(self.dir), "rays": sum(i["rays"] for i in infos),
                 "stopped_early": sum(i["stopped_early"] for i in infos)}
         return np.stack(columns, axis=1), info
 
-    def _read(self, ref_td, ref_th, a, cause, c, nodes):
-        from ._storage import _read_parquet, round_sig
-
+    def _read(self, ref, a, cause, c, nodes):
+        """The rays at the reference layers ``ref`` (2 mm aperture) scaled by ``a``: read
+        from the cache file, the missing ones solved into it first."""
+        stem = "td{t_d:g}_th{t_h:g}".format(**_keywords(ref))
         if cause is None:
-            path = self.dir / f"td{ref_td:g}_th{ref_th:g}.parquet"
+            path = self.dir / f"{stem}.parquet"
             coord = None
         else:
             # a thickness node is a length: it scales with the aperture like the layers
             coord = round_sig(c / a, 6) if cause.geometric else c
-            path = self.dir / f"td{ref_td:g}_th{ref_th:g}__{cause.keyword}{coord:g}.parquet"
-        ids = self._ray_ids(2.0, ref_td, ref_th, cause, coord, nodes)
+            path = self.dir / f"{stem}__{cause.keyword}{coord:g}.parquet"
+        ids = self._ray_ids(2.0, ref, cause, coord, nodes)
         if not path.exists():
-            self._solve(path, ids, ref_td, ref_th)
+            self._solve(path, ids, ref)
         frame, meta = _read_parquet(path)
         solved = set(frame["ray_id"])
         missing = [rid for rid in ids if rid not in solved]
         if missing:  # other X1h/X1d nodes than those solved before: add them to the file
             extra = path.with_name(f"{path.stem}.extra.parquet")
-            self._solve(extra, missing, ref_td, ref_th)
+            self._solve(extra, missing, ref)
             _merge_bundles([path, extra], path)
             frame, meta = _read_parquet(path)
         p = np.asarray(self.spec.pressures_mbar)
@@ -170,11 +238,13 @@ class OnDemandRays:
         stopped = sum(1 for rid in ids if not infos.get(rid, {}).get("converged", True))
         return out, {"cache": str(path), "rays": len(ids), "stopped_early": stopped}
 
-    def _solve(self, path: Path, ids, td: float, th: float):
-        from ._ray_solve import compute_bundle
-
+    def _solve(self, path: Path, ids, ref: dict):
+        """Solve the rays ``ids`` at the reference layers ``ref`` into the file ``path``."""
         import time
 
+        from ._ray_solve import compute_bundle
+
+        td, th = _keywords(ref)["t_d"], _keywords(ref)["t_h"]
         log.info("solving %d FE rays on demand for t_d/a = %g, t_h/a = %g -> %s",
                  len(ids), td, th, path)
         start = time.perf_counter()
@@ -198,9 +268,8 @@ class OnDemandRays:
 
 
 def _merge_bundles(parts, path):
+    """Merge bundle files into ``path`` (their rays and solver records); remove the parts."""
     import pandas as pd
-
-    from ._storage import _read_parquet, _write_parquet
 
     frames, meta = [], {}
     for p in parts:

@@ -37,7 +37,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._causes import BASELINE, Cause
-from ._storage import AXES, POINT_ID_PATTERN, _fmt, parse_point_id, point_id, round_sig
+from ._storage import (
+    AXES,
+    POINT_ID_PATTERN,
+    SIGNIFICANT_DIGITS,
+    _fmt,
+    parse_point_id,
+    point_id,
+    round_sig,
+)
 
 __all__ = ["RaySpec", "ray_id", "parse_ray_id", "RAY_ID_PATTERN", "EXTRA_KEYWORDS", "rays_of",
            "ray_bundles", "bundle_id", "BUNDLE_ID_PATTERN"]
@@ -279,12 +287,17 @@ class RaySpec:
                 "fallback": [dict(f) for f in self.fallback]}
 
 
-def _ray_params(spec: RaySpec, probe: float, ratio: float, cause: Cause | None, coord) -> dict:
+def _ray_params(spec: RaySpec, probe: float, ratio: float, cause: Cause | None, coord,
+                layers=None, digits: int = SIGNIFICANT_DIGITS) -> dict:
+    """The model keywords of one ray: at ``X1d = x1d_ref``, on ``layers`` (``{"t_d": mm,
+    "t_h": mm}``; default the paper's, left out), the cause's value at ``coord``
+    rounded to ``digits`` (a thickness cause replaces its layer)."""
     x1d = spec.x1d_ref
     params = {"probe_mm": probe, "bottom": spec.bottom, "x1d": round_sig(x1d),
-              "x1h": round_sig(ratio * x1d)}
+              "x1h": round_sig(ratio * x1d), **(layers or {})}
     if cause is not None:
-        params.update({k: round_sig(v) for k, v in cause.simulate_keywords(coord, x1d).items()})
+        params.update({k: round_sig(v, digits)
+                       for k, v in cause.simulate_keywords(coord, x1d).items()})
     return params
 
 

@@ -43,6 +43,18 @@ SPEC_KEYS = {
     "t_h": "t_h",
 }
 
+#: The parameter path of the skin (:class:`skinsuction.model.Skin`, the paper's
+#: dermis over hypodermis) that each numeric grid axis sets: the axes, the point
+#: and ray ids and the stored columns keep the two-layer keywords (they are data).
+AXIS_PATHS = {
+    "x1d": "dermis.X1",
+    "x1h": "hypodermis.X1",
+    "x2d": "dermis.X2",
+    "x2h": "hypodermis.X2",
+    "t_d": "dermis.thickness",
+    "t_h": "hypodermis.thickness",
+}
+
 #: Axis values used when a space specification omits the axis.
 DEFAULTS = {
     "bottom": ["fixed"],
