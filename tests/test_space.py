@@ -242,10 +242,16 @@ def test_grid_shape_and_nan_for_failed_points(small_space):
     _, _, _, m_strict = s.grid(2.0, partial=False)
     assert np.isnan(m_strict[i, j]).all()
     # the 6 mm aperture has no failure; deflection grows with pressure
-    m6 = s.grid(6, bottom="fixed", x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0)[3]
+    m6 = s.grid(6, {"dermis.X2": 0.0, "hypodermis.X2": 0.0, "dermis.thickness": 1.0,
+                    "hypodermis.thickness": 1.0}, bottom="fixed")[3]
     assert np.isfinite(m6).all() and (np.diff(m6, axis=2) > 0).all()
+    assert np.array_equal(m6, s.grid(6.0)[3], equal_nan=True)  # the paths' defaults
     with pytest.raises(KeyError, match="available"):
         s.grid(4.0)
+    with pytest.raises(KeyError, match="t_d=1.3"):
+        s.grid(6.0, {"dermis.thickness": 1.3})
+    with pytest.raises(ValueError, match="not an axis of a slice"):
+        s.grid(6.0, {"t_d": 1.0})
 
 
 def test_grid_marks_missing_points_nan(small_space):

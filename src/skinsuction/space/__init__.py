@@ -55,6 +55,7 @@ from ._geometry import (
     window_nodes,
 )
 from ._grid import (
+    SLICE_PATHS,
     SimulatedSpace,
     assemble_space,
     convergence_summary,
@@ -145,7 +146,7 @@ __all__ = [
     # FE solves
     "compute_point", "solve_with_fallbacks",
     # the grid layout
-    "SimulatedSpace", "assemble_space", "convergence_summary", "expand_axis", "grid_points",
+    "SimulatedSpace", "SLICE_PATHS", "assemble_space", "convergence_summary", "expand_axis", "grid_points",
     "read_space", "GriddedSpace",
     # interpolation
     "LagrangeAxis", "SpaceInterpolant", "evaluate", "interpolate_pressure",

@@ -35,6 +35,7 @@ import pandas as pd
 
 from ._storage import (
     AXES,
+    AXIS_PATHS,
     BOTTOMS,
     COLUMNS,
     DEFAULTS,
@@ -184,6 +185,11 @@ def assemble_space(curve_paths, out_path, config: dict, name: str) -> "Simulated
         The validated study configuration.
     name : str
         Name of the space in ``config["spaces"]``.
+
+    Returns
+    -------
+    SimulatedSpace
+        The database as written.
     """
     from skinsuction.provenance import collect
 
@@ -256,33 +262,31 @@ class SimulatedSpace:
         return self.frame.drop_duplicates("point_id")[cols].reset_index(drop=True)
 
     def slices(self) -> pd.DataFrame:
-        """The available (probe, bottom, X2d, X2h, t_d, t_h) combinations."""
+        """The available (probe, bottom, X2d, X2h, t_d, t_h) combinations.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``probe_mm, bottom, x2d, x2h, t_d, t_h`` (the stored columns),
+            one row per slice.
+        """
         keys = ["probe_mm", "bottom", "x2d", "x2h", "t_d", "t_h"]
         return self.frame[keys].drop_duplicates().sort_values(keys).reset_index(drop=True)
 
-    def grid(
-        self,
-        probe_mm,
-        bottom="fixed",
-        x2d=0.0,
-        x2h=0.0,
-        t_d=1.0,
-        t_h=1.0,
-        *,
-        partial=True,
-    ):
+    def grid(self, probe_mm, values=None, *, bottom="fixed", partial=True):
         """The (X1d, X1h, p) grid of deflections for one aperture and condition.
 
         Parameters
         ----------
         probe_mm : float
             Aperture (probe) diameter in mm.
-        bottom : {"fixed", "axial", "free"}
+        values : mapping, optional
+            The values of the other axes, by parameter path of the skin
+            (:data:`SLICE_PATHS`): ``dermis.X2``, ``hypodermis.X2`` (MPa),
+            ``dermis.thickness``, ``hypodermis.thickness`` (mm).  A path not
+            given is at its default (0 MPa, 1 mm: the paper's).
+        bottom : {"fixed", "axial", "free"}, keyword-only
             Boundary condition at the hypodermis/bone interface.
-        x2d, x2h : float
-            Second-order moduli (MPa) of dermis and hypodermis.
-        t_d, t_h : float
-            Dermis and hypodermis thickness (mm).
         partial : bool, keyword-only
             If True (default), a non-converged point keeps its deflections up to
             its last converged pressure; if False, the whole curve is NaN.
@@ -303,7 +307,14 @@ class SimulatedSpace:
         ------
         KeyError
             If the database has no point for this combination.
+        ValueError
+            For a path of ``values`` that is not one of :data:`SLICE_PATHS`.
+
+        Examples
+        --------
+        >>> space.grid(6.0, {"dermis.thickness": 1.3})                # doctest: +SKIP
         """
+        x2d, x2h, t_d, t_h = _slice_values(values)
         f = self.frame
         sel = (
             np.isclose(f["probe_mm"].to_numpy(float), float(probe_mm), rtol=1e-9, atol=0)
@@ -336,12 +347,44 @@ class SimulatedSpace:
         return x1d, x1h, p, out
 
     def convergence_summary(self) -> pd.DataFrame:
-        """Converged point counts per probe and bottom condition."""
+        """Converged point counts per probe and bottom condition.
+
+        Returns
+        -------
+        pandas.DataFrame
+            As :func:`convergence_summary`.
+        """
         return convergence_summary(self.frame)
 
 
+#: The grid axes a slice of the database fixes besides the probe and the bottom, by the
+#: parameter path of the skin (:data:`skinsuction.space.AXIS_PATHS`), in the order x2d,
+#: x2h, t_d, t_h.
+SLICE_PATHS = tuple(AXIS_PATHS[key] for key in ("x2d", "x2h", "t_d", "t_h"))
+
+
+def _slice_values(values) -> tuple:
+    """``(x2d, x2h, t_d, t_h)`` of a mapping by parameter path, defaults where not given."""
+    values = dict(values or {})
+    unknown = sorted(set(values) - set(SLICE_PATHS))
+    if unknown:
+        raise ValueError(f"{unknown}: not an axis of a slice of the grid; its axes are "
+                         f"{list(SLICE_PATHS)}")
+    keys = ("x2d", "x2h", "t_d", "t_h")
+    return tuple(float(values.get(path, DEFAULTS[key][0])) for path, key in zip(SLICE_PATHS, keys))
+
+
 def read_space(path) -> SimulatedSpace:
-    """Read a simulated-space database written by :func:`assemble_space`."""
+    """Read a simulated-space database written by :func:`assemble_space`.
+
+    Parameters
+    ----------
+    path : path-like
+
+    Returns
+    -------
+    SimulatedSpace
+    """
     frame, meta = _read_parquet(path)
     return SimulatedSpace(frame, meta)
 
@@ -349,11 +392,19 @@ def read_space(path) -> SimulatedSpace:
 def convergence_summary(frame: pd.DataFrame) -> pd.DataFrame:
     """Per (probe, bottom): number of points, converged, failed, solver effort.
 
-    Columns: ``probe_mm, bottom, n_points, n_converged, n_failed, n_fallback``
-    (points whose kept curve is the fallback mesh's), ``fraction_converged,
-    min_last_converged_mbar, newton_iterations_median,
-    dofs_median, seconds_median, seconds_total, reasons`` (failure reasons with
-    their counts).
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        A database's rows (:attr:`SimulatedSpace.frame`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``probe_mm, bottom, n_points, n_converged, n_failed, n_fallback``
+        (points whose kept curve is the fallback mesh's), ``fraction_converged,
+        min_last_converged_mbar, newton_iterations_median, dofs_median,
+        seconds_median, seconds_total, reasons`` (failure reasons with their
+        counts).
     """
     pts = frame.drop_duplicates("point_id")
     rows = []
