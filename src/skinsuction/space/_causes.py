@@ -20,9 +20,9 @@ Examples
 >>> sorted(reg)
 ['dermis_thickness', 'hypodermis_thickness', 'pre_tension', 'strain_stiffening']
 >>> c = reg["strain_stiffening"]
->>> c.symbol, c.unit, c.value(coordinate=2.0, x1d=0.05)
+>>> c.symbol, c.unit, c.value(coordinate=2.0, dermis_X1=0.05)
 ('X2d', 'MPa', 0.1)
->>> c.coordinate(value=0.1, x1d=0.05)
+>>> c.coordinate(value=0.1, dermis_X1=0.05)
 2.0
 """
 
@@ -144,13 +144,35 @@ class Cause:
         return self.nodes[-1]
 
     def to_axis(self, coordinate):
-        """Interpolation/search axis ``u`` of a ray coordinate (see ``scale``)."""
+        """Interpolation/search axis ``u`` of a ray coordinate (see ``scale``).
+
+        Parameters
+        ----------
+        coordinate : float or array_like
+            Ray coordinates.
+
+        Returns
+        -------
+        float or ndarray
+            ``u``, of the same shape.
+        """
         c = np.asarray(coordinate, dtype=float)
         u = SCALES[self.scale][0](c)
         return float(u) if np.ndim(u) == 0 else u
 
     def from_axis(self, u):
-        """Ray coordinate of an axis value (inverse of :meth:`to_axis`)."""
+        """Ray coordinate of an axis value (inverse of :meth:`to_axis`).
+
+        Parameters
+        ----------
+        u : float or array_like
+            Axis values.
+
+        Returns
+        -------
+        float or ndarray
+            Ray coordinates, of the same shape.
+        """
         c = SCALES[self.scale][1](np.asarray(u, dtype=float))
         return float(c) if np.ndim(c) == 0 else c
 
@@ -158,21 +180,60 @@ class Cause:
     def axis_nodes(self) -> np.ndarray:
         return np.asarray(self.to_axis(np.asarray(self.nodes)), dtype=float)
 
-    def value(self, coordinate, x1d):
-        """Parameter value (in ``unit``) of a ray coordinate at a given X1d (MPa)."""
+    def value(self, coordinate, dermis_X1):
+        """Parameter value (in ``unit``) of a ray coordinate.
+
+        Parameters
+        ----------
+        coordinate : float or array_like
+            Ray coordinates (``value / X1d`` for a modulus, else the value).
+        dermis_X1 : float or array_like
+            The skin's ``dermis.X1`` (MPa), which scales a modulus; broadcast
+            with ``coordinate``.
+
+        Returns
+        -------
+        float or ndarray
+        """
         c = np.asarray(coordinate, dtype=float)
-        out = c * np.asarray(x1d, dtype=float) if self.modulus else c
+        out = c * np.asarray(dermis_X1, dtype=float) if self.modulus else c
         return float(out) if np.ndim(out) == 0 else out
 
-    def coordinate(self, value, x1d):
-        """Ray coordinate of a parameter value at a given X1d (MPa)."""
+    def coordinate(self, value, dermis_X1):
+        """Ray coordinate of a parameter value (inverse of :meth:`value`).
+
+        Parameters
+        ----------
+        value : float or array_like
+            Parameter values (in ``unit``).
+        dermis_X1 : float or array_like
+            The skin's ``dermis.X1`` (MPa).
+
+        Returns
+        -------
+        float or ndarray
+        """
         v = np.asarray(value, dtype=float)
-        out = v / np.asarray(x1d, dtype=float) if self.modulus else v
+        out = v / np.asarray(dermis_X1, dtype=float) if self.modulus else v
         return float(out) if np.ndim(out) == 0 else out
 
-    def simulate_keywords(self, coordinate, x1d) -> dict:
-        """The two-layer grid point's keyword for this coordinate (``{"x2d": ...}``)."""
-        return {self.keyword: float(self.value(coordinate, x1d))}
+    def simulate_keywords(self, coordinate, dermis_X1) -> dict:
+        """The two-layer grid point's keyword for this coordinate, as a ray id spells it.
+
+        Parameters
+        ----------
+        coordinate : float
+            The ray coordinate.
+        dermis_X1 : float
+            The skin's ``dermis.X1`` (MPa) the ray is run at.
+
+        Returns
+        -------
+        dict
+            ``{keyword: value}``, e.g. ``{"x2d": 0.02}``; :meth:`apply` sets the
+            same value on a skin by its :attr:`paths`.
+        """
+        return {self.keyword: float(self.value(coordinate, dermis_X1))}
 
     @property
     def paths(self) -> tuple:
@@ -209,12 +270,28 @@ class Cause:
         return skin.replace({path: value for path in self.paths})
 
     def to_dict(self) -> dict:
+        """The cause as plain JSON-able values (:meth:`from_dict` reads it back).
+
+        Returns
+        -------
+        dict
+        """
         d = asdict(self)
         d["nodes"] = list(self.nodes)
         return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "Cause":
+        """A cause of :meth:`to_dict`'s form (unknown keys are ignored).
+
+        Parameters
+        ----------
+        d : dict
+
+        Returns
+        -------
+        Cause
+        """
         return cls(**{k: v for k, v in d.items() if k in cls.__dataclass_fields__})
 
 
@@ -257,6 +334,21 @@ def registry_from_config(causes: dict) -> dict:
     Every entry needs ``keyword``, ``symbol``, ``unit``, ``neutral`` and ``nodes``
     (``modulus`` defaults to False).  Node lists may use the axis forms of the
     configuration (see :func:`skinsuction.space.expand_axis`).
+
+    Parameters
+    ----------
+    causes : dict
+        ``{name: {keyword, symbol, unit, neutral, nodes, ...}}``.
+
+    Returns
+    -------
+    dict
+        ``{name: Cause}``.
+
+    Raises
+    ------
+    ValueError
+        Naming the entry (``diagnosis.causes.<name>``) and what is wrong with it.
     """
     from ._grid import expand_axis
 
@@ -273,5 +365,11 @@ def registry_from_config(causes: dict) -> dict:
 
 
 def default_registry() -> dict:
-    """The built-in registry (:data:`DEFAULT_CAUSES`)."""
+    """The built-in registry (:data:`DEFAULT_CAUSES`).
+
+    Returns
+    -------
+    dict
+        ``{name: Cause}``.
+    """
     return registry_from_config(DEFAULT_CAUSES)
