@@ -175,8 +175,8 @@ def inp_deck(model, pressures_mbar=(0.0, 100.0), max_increment_mbar=10.0,
         average of the forces at 0.01 when there is none yet, and against it the
         nodal forces of this soft problem in N (1e-5 and less) pass the residual
         test after two iterations, unconverged (0.4 % off on the 6 mm reference
-        skin at 25 mbar in one increment, 4 % on a soft skin). In uN they are
-        1-100 and the test is a real one.
+        skin at 25 mbar in one increment, 4 % on a soft skin). In uN the mean
+        force is 0.1 and more, and the test is a real one (docs/calculix.md).
 
     Returns
     -------
