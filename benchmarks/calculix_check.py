@@ -27,7 +27,7 @@ import numpy as np  # noqa: E402
 from scipy.optimize import brentq  # noqa: E402
 
 from skinsuction.model import Skin, SuctionTest  # noqa: E402
-from skinsuction.model._inp import inp_deck, run_calculix  # noqa: E402
+from skinsuction.model import inp_deck, run_calculix  # noqa: E402
 
 SKIN = Skin.two_layer(0.08, 4.1e-4)  # the reference skin: 1 + 1 mm, fixed bottom
 PRESSURES = [0, 25, 50, 75, 100]

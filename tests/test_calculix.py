@@ -24,7 +24,7 @@ import pytest
 
 import skinsuction
 from skinsuction.model import ParameterError, Skin, SuctionTest
-from skinsuction.model._inp import (
+from skinsuction.model import (
     ABAQUS_ORDER,
     CalculixError,
     inp_deck,

@@ -8,7 +8,7 @@ solves a skin under a probe for M(p).
 from ._curve import Curve, ParameterError
 from ._fast import SWAP, FastAssembly, material_response
 from ._geometry import MeshSettings, edge_fan, layer_breaks, suction_mesh
-from ._inp import inp_deck, read_dat, run_calculix, write_inp
+from ._inp import CalculixError, inp_deck, read_dat, run_calculix, write_inp
 from ._material import SkinLayers, bulk_modulus, prestress, thickness_stretch
 from ._prony import Prony
 from ._simulate import (
@@ -18,6 +18,7 @@ from ._skin import BOTTOM_CONDITIONS, MAX_LAYERS, Layer, Probe, Ramp, Skin
 
 __all__ = [
     "BOTTOM_CONDITIONS",
+    "CalculixError",
     "Curve",
     "DEFAULT_PRESSURES_MBAR",
     "FastAssembly",
