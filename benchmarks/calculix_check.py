@@ -4,7 +4,7 @@ under the 2 and 6 mm probes (prints a table; asserts nothing).
 At each refinement level k (every element of the default mesh split into k^2,
 the fan's rings and spokes included) the same mesh is solved by this model's
 fast path and by CalculiX (``ccx``, the deck of
-:func:`skinsuction.model._inp.inp_deck`), with the probe wall off on both sides
+:func:`skinsuction.model.inp_deck`), with the probe wall off on both sides
 (the deck omits it; for this skin it is never touched: the column "wall on" is
 this model with it). The relative difference is between the two codes on one
 mesh; the mesh limit of each code is a Richardson extrapolation of its three

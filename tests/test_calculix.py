@@ -1,6 +1,6 @@
 """The model against CalculiX: the same mesh as an Abaqus deck, solved by ccx.
 
-:func:`skinsuction.model._inp.inp_deck` writes a built model (its mesh, layers,
+:func:`skinsuction.model.inp_deck` writes a built model (its mesh, layers,
 boundary conditions, follower suction) as a plain Abaqus input deck; CalculiX
 (``ccx``, an independent FE code) solves it with its own elements (CAX8R,
 expanded to 20-node bricks), material laws (NEO HOOKE, REDUCED POLYNOMIAL) and
