@@ -24,8 +24,8 @@ import pytest
 
 import skinsuction
 from skinsuction.model import ParameterError, Skin, SuctionTest
+from skinsuction.model._inp import ABAQUS_ORDER  # the node order the deck writes
 from skinsuction.model import (
-    ABAQUS_ORDER,
     CalculixError,
     inp_deck,
     read_dat,

@@ -153,6 +153,94 @@ def _suction_faces(model, cells_abq, used):
     return faces
 
 
+def _header(model, p, stress_unit, scale, element, cells, used):
+    """The deck's heading and comment lines (skin, units, mesh, what it omits), and
+    the ``*NODE`` keyword that follows them."""
+    import skinsuction
+
+    s = model.settings
+    force = {"Pa": "uN", "kPa": "mN", "MPa": "N"}[stress_unit]
+    probe = model.parameters["probe_mm"]
+    a = probe / 2
+    skin = model.skin
+    collapsed = sum(len(set(c)) < 8 for c in cells.tolist())
+    version = skinsuction.__version__
+    out = ["*HEADING",
+           f"Skin suction test: {probe:g} mm probe, {len(skin.layers)} layer(s), "
+           f"skinsuction {version}",
+           f"** Written by skinsuction {version} (skinsuction.model.inp_deck): the model",
+           "** skinsuction.model.SuctionTest solves, for any FE code that reads Abaqus input.",
+           "** Axisymmetric suction (Cutometer) test. The skin is glued to the probe's face",
+           f"** outside the aperture (z = 0, r >= a = {a:g} mm) and sucked into it by a",
+           "** follower pressure on its free surface inside (z = 0, r < a).",
+           f"** Units: mm, {stress_unit} (forces in {force}); 1 mbar = "
+           f"{_f(MBAR_TO_MPA * scale)} {stress_unit}.",
+           "** Coordinates: x = r (radius), y = z (axial, up; skin surface y = 0, bottom "
+           f"y = {-skin.depth:g}).",
+           "** Output: U2 of node set APEX (the apex deflection M, mm) in the .dat file.",
+           "** Skin, top layer first:"]
+    for layer in skin.layers:
+        out.append(f"**   {layer.name}: thickness {layer.thickness:g} mm, X1 = {layer.X1:g} "
+                   f"MPa, X2 = {layer.X2:g} MPa")
+    out += [f"** Bottom: {skin.bottom} (fixed: U1 = U2 = 0; axial: U2 = 0; free: none).",
+            "** W = X1 (I1bar - 3) + X2 (I1bar - 3)^2 + K/2 (J - 1)^2, K = 4 X1 (1 + nu) / "
+            f"(3 (1 - 2 nu)), nu = {model.parameters['poisson']:g}.",
+            f"** Probe: aperture diameter {probe:g} mm. Pressures (mbar), each the end of "
+            f"a step: {' '.join(f'{v:g}' for v in p)}",
+            "** The total time of the analysis is the suction pressure in mbar.",
+            f"** Mesh: {s.corner} corner, refinement {s.refinement:g}, {len(cells)} {element}"
+            f" elements ({collapsed} collapsed onto the aperture edge), "
+            f"{int(used.sum())} nodes.",
+            "** OMITTED: the frictionless rigid probe wall at r = a (skinsuction's mesh",
+            "**   setting probe_wall, a penalty contact that acts only where the skin",
+            "**   bulges past r = a): this deck is the model with probe_wall False.",
+            "*NODE, NSET=NALL"]
+    return out
+
+
+def _boundary_sets(model, used, out):
+    """Append the node sets of the fixed DOFs (axis, glued face, bottom) to ``out``;
+    returns ``(set name, Abaqus DOF)`` pairs for ``*BOUNDARY``."""
+    fixed = []
+    for key in ("axis", "glued", "bottom"):
+        if key not in model.boundaries:
+            continue
+        boundary = model.boundaries[key]
+        if np.any(np.asarray(boundary.value) != 0):
+            raise ParameterError(f"inp_deck: boundary {key!r} prescribes a non-zero value")
+        mask = np.asarray(boundary.mask, dtype=bool) & used[:, None]
+        for col in (1, 0):  # Abaqus DOF 1 (r), then 2 (z)
+            nodes = np.flatnonzero(mask[:, col])
+            if len(nodes):
+                name = f"{key.upper()}_U{_DOF[col]}"
+                out.append(f"*NSET, NSET={name}")
+                out += _lines(nodes + 1)
+                fixed.append((name, _DOF[col]))
+
+    return fixed
+
+
+def _steps(p, faces, max_increment_mbar, scale):
+    """One ``*STEP`` per output pressure: the suction ramped over it as a follower
+    ``*DLOAD`` on the surface faces, the apex printed at every increment."""
+    out = []
+    for p0, p1 in zip(p[:-1], p[1:]):
+        dp = p1 - p0
+        inc = min(dp, float(max_increment_mbar))
+        out += [f"** {p0:g} -> {p1:g} mbar, ramped over a step time of {dp:g}",
+                "*STEP, NLGEOM=YES, INC=10000",
+                "*STATIC",
+                f"{_f(inc)}, {_f(dp)}, {_f(dp * 1e-6)}, {_f(inc)}",
+                "** equilibrium to 1e-7 of the mean nodal force (default 5e-3)",
+                "*CONTROLS, PARAMETERS=FIELD",
+                "1e-7, 1e-6",
+                "** suction: a negative (outward) pressure, following the surface",
+                "*DLOAD"]
+        out += [f"SUCTION_P{k}, P{k}, {_f(-p1 * MBAR_TO_MPA * scale)}" for k in sorted(faces)]
+        out += ["*NODE PRINT, NSET=APEX", "U", "*END STEP"]
+    return out
+
+
 def inp_deck(model, pressures_mbar=(0.0, 100.0), max_increment_mbar=10.0,
              stress_unit="Pa") -> str:
     """An Abaqus/CalculiX input deck of a built suction-test model.
@@ -206,8 +294,6 @@ def inp_deck(model, pressures_mbar=(0.0, 100.0), max_increment_mbar=10.0,
     >>> deck.count("*STEP"), deck.count("*MATERIAL"), deck.count("*HYPERELASTIC, NEO HOOKE")
     (2, 2, 2)
     """
-    import skinsuction
-
     _refuse(model)
     p = np.asarray(pressures_mbar, dtype=float).ravel()
     if len(p) < 2 or p[0] != 0 or np.any(np.diff(p) <= 0) or not np.all(np.isfinite(p)):
@@ -219,7 +305,6 @@ def inp_deck(model, pressures_mbar=(0.0, 100.0), max_increment_mbar=10.0,
         raise ParameterError(
             f"stress_unit must be one of {sorted(STRESS_UNITS)}, not {stress_unit!r}")
     scale = STRESS_UNITS[stress_unit]
-    force = {"Pa": "uN", "kPa": "mN", "MPa": "N"}[stress_unit]
     s = model.settings
     cells = np.asarray(model.mesh.cells)
     points = np.asarray(model.mesh.points, dtype=float)
@@ -228,42 +313,8 @@ def inp_deck(model, pressures_mbar=(0.0, 100.0), max_increment_mbar=10.0,
     cells_abq = cells[:, ABAQUS_ORDER]
     _check_orientation(points, cells_abq)
     element = "CAX8R" if s.quadrature == "reduced" else "CAX8"
-    probe = model.parameters["probe_mm"]
-    a = probe / 2
-    skin = model.skin
-    collapsed = sum(len(set(c)) < 8 for c in cells.tolist())
-    version = skinsuction.__version__
 
-    out = ["*HEADING",
-           f"Skin suction test: {probe:g} mm probe, {len(skin.layers)} layer(s), "
-           f"skinsuction {version}",
-           f"** Written by skinsuction {version} (skinsuction.model.inp_deck): the model",
-           "** skinsuction.model.SuctionTest solves, for any FE code that reads Abaqus input.",
-           "** Axisymmetric suction (Cutometer) test. The skin is glued to the probe's face",
-           f"** outside the aperture (z = 0, r >= a = {a:g} mm) and sucked into it by a",
-           "** follower pressure on its free surface inside (z = 0, r < a).",
-           f"** Units: mm, {stress_unit} (forces in {force}); 1 mbar = "
-           f"{_f(MBAR_TO_MPA * scale)} {stress_unit}.",
-           "** Coordinates: x = r (radius), y = z (axial, up; skin surface y = 0, bottom "
-           f"y = {-skin.depth:g}).",
-           "** Output: U2 of node set APEX (the apex deflection M, mm) in the .dat file.",
-           "** Skin, top layer first:"]
-    for layer in skin.layers:
-        out.append(f"**   {layer.name}: thickness {layer.thickness:g} mm, X1 = {layer.X1:g} "
-                   f"MPa, X2 = {layer.X2:g} MPa")
-    out += [f"** Bottom: {skin.bottom} (fixed: U1 = U2 = 0; axial: U2 = 0; free: none).",
-            "** W = X1 (I1bar - 3) + X2 (I1bar - 3)^2 + K/2 (J - 1)^2, K = 4 X1 (1 + nu) / "
-            f"(3 (1 - 2 nu)), nu = {model.parameters['poisson']:g}.",
-            f"** Probe: aperture diameter {probe:g} mm. Pressures (mbar), each the end of "
-            f"a step: {' '.join(f'{v:g}' for v in p)}",
-            "** The total time of the analysis is the suction pressure in mbar.",
-            f"** Mesh: {s.corner} corner, refinement {s.refinement:g}, {len(cells)} {element}"
-            f" elements ({collapsed} collapsed onto the aperture edge), "
-            f"{int(used.sum())} nodes.",
-            "** OMITTED: the frictionless rigid probe wall at r = a (skinsuction's mesh",
-            "**   setting probe_wall, a penalty contact that acts only where the skin",
-            "**   bulges past r = a): this deck is the model with probe_wall False.",
-            "*NODE, NSET=NALL"]
+    out = _header(model, p, stress_unit, scale, element, cells, used)
     for n in np.flatnonzero(used):
         out.append(f"{n + 1}, {_f(points[n, 1])}, {_f(points[n, 0])}")
 
@@ -278,22 +329,7 @@ def inp_deck(model, pressures_mbar=(0.0, 100.0), max_increment_mbar=10.0,
         out += _material_lines(name, x1, x2, bulk, scale, stress_unit)
 
     out += ["*NSET, NSET=APEX", f"{model.apex + 1}"]
-    fixed = []
-    for key in ("axis", "glued", "bottom"):
-        if key not in model.boundaries:
-            continue
-        boundary = model.boundaries[key]
-        if np.any(np.asarray(boundary.value) != 0):
-            raise ParameterError(f"inp_deck: boundary {key!r} prescribes a non-zero value")
-        mask = np.asarray(boundary.mask, dtype=bool) & used[:, None]
-        for col in (1, 0):  # Abaqus DOF 1 (r), then 2 (z)
-            nodes = np.flatnonzero(mask[:, col])
-            if len(nodes):
-                name = f"{key.upper()}_U{_DOF[col]}"
-                out.append(f"*NSET, NSET={name}")
-                out += _lines(nodes + 1)
-                fixed.append((name, _DOF[col]))
-
+    fixed = _boundary_sets(model, used, out)
     faces = _suction_faces(model, cells_abq, used)
     for k, ids in sorted(faces.items()):
         out.append(f"*ELSET, ELSET=SUCTION_P{k}")
@@ -301,20 +337,7 @@ def inp_deck(model, pressures_mbar=(0.0, 100.0), max_increment_mbar=10.0,
     out.append("*BOUNDARY")
     out += [f"{name}, {dof}, {dof}" for name, dof in fixed]
 
-    for p0, p1 in zip(p[:-1], p[1:]):
-        dp = p1 - p0
-        inc = min(dp, float(max_increment_mbar))
-        out += [f"** {p0:g} -> {p1:g} mbar, ramped over a step time of {dp:g}",
-                "*STEP, NLGEOM=YES, INC=10000",
-                "*STATIC",
-                f"{_f(inc)}, {_f(dp)}, {_f(dp * 1e-6)}, {_f(inc)}",
-                "** equilibrium to 1e-7 of the mean nodal force (default 5e-3)",
-                "*CONTROLS, PARAMETERS=FIELD",
-                "1e-7, 1e-6",
-                "** suction: a negative (outward) pressure, following the surface",
-                "*DLOAD"]
-        out += [f"SUCTION_P{k}, P{k}, {_f(-p1 * MBAR_TO_MPA * scale)}" for k in sorted(faces)]
-        out += ["*NODE PRINT, NSET=APEX", "U", "*END STEP"]
+    out += _steps(p, sorted(faces), max_increment_mbar, scale)
     return "\n".join(out) + "\n"
 
 
