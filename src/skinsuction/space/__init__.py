@@ -11,17 +11,30 @@ every X1d and every pressure protocol (:class:`RaySpace`,
 :mod:`skinsuction.identify` and :mod:`skinsuction.diagnose` ask of a space:
 deflections at (candidates, pressures).
 
-Modules: ``_storage`` (point ids, curve files, Parquet with provenance),
-``_solve`` (FE solves with fallback meshes), ``_grid`` (the grid layout's
-database), ``_lagrange`` (local cubic Lagrange weights on one axis),
-``_interpolate`` (a grid of one probe, :class:`GriddedSpace`, interpolated with
-its NaN policy), ``_causes`` (the cause coordinates of the
-scale-free space), ``_rays`` (which rays: their ids, the specification, the FE
-jobs), ``_ray_space`` (the rays stored and read back), ``_ray_solve`` and
-``_ray_interpolate`` (the scale-free layout solved and interpolated), ``_geometry`` (the spaces of one measurement at its probes and layer
-thicknesses, rays solved on demand), ``_open`` (either layout, per probe), ``_shipped`` (the
-default space: the workflow's build in the working directory, else the one
-shipped with the package; comparing and shipping builds).
+The grid axes and the ray ids keep the paper's two-layer keywords (``x1d``,
+``t_d``, ...: they are data, :data:`AXES`); where a function takes a skin's
+values it names them by parameter path of :class:`skinsuction.model.Skin`
+(``"dermis.thickness"``, ``"dermis.X2"``; :data:`AXIS_PATHS`).
+
+Modules:
+
+* ``_storage``: point ids, curve files, Parquet with provenance;
+* ``_solve``: FE solves with fallback meshes;
+* ``_grid``: the grid layout's database (:class:`SimulatedSpace`);
+* ``_lagrange``: local cubic Lagrange weights on one axis;
+* ``_interpolate``: a grid of one probe (:class:`GriddedSpace`) interpolated,
+  with its NaN policy;
+* ``_causes``: the causes and their ray coordinates;
+* ``_rays``: which rays a scale-free space has (ids, :class:`RaySpec`, FE jobs);
+* ``_ray_space``: the rays stored and read back (:class:`RaySpace`);
+* ``_ray_solve``, ``_ray_interpolate``: the rays solved and interpolated;
+* ``_on_demand``: rays at a measurement's own probe and layers, solved on
+  demand and cached (:class:`OnDemandRays`);
+* ``_geometry``: the spaces of one measurement (:func:`spaces_at`);
+* ``_open``: either layout, per probe (:func:`load_space`);
+* ``_shipped``: the default space (the workflow's build in the working
+  directory, else the one shipped with the package) and shipping a build;
+* ``_shipped_check``: a fresh build compared with the shipped space.
 
 Examples
 --------

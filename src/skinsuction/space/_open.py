@@ -53,16 +53,56 @@ class ProbeSpace(Protocol):
     pressure_range: tuple
 
     def interpolant_at(self, pressure_mbar, nan_policy: str = "shift"):
-        """Callable ``(N, d) candidates -> (N, u)`` deflections (mm), with ``lower``, ``upper``."""
+        """The space at fixed pressures.
+
+        Parameters
+        ----------
+        pressure_mbar : array_like, shape (u,)
+            The measured pressures (mbar).
+        nan_policy : str
+            How non-converged nodes are handled (``"shift"``; a grid also has
+            ``"strict"``).
+
+        Returns
+        -------
+        callable
+            ``(N, d) candidates -> (N, u)`` deflections (mm), with ``lower`` and
+            ``upper`` bounds of the candidates.
+        """
 
     def to_moduli(self, candidates) -> np.ndarray:
-        """``(N, 2)`` X1d, X1h (MPa) of candidates."""
+        """X1d, X1h of candidates.
+
+        Parameters
+        ----------
+        candidates : array_like, shape (N, d)
+
+        Returns
+        -------
+        ndarray, shape (N, 2)
+            X1d, X1h in MPa.
+        """
 
     def from_moduli(self, moduli) -> np.ndarray:
-        """Candidates of ``(N, 2)`` moduli."""
+        """Candidates of moduli (inverse of :meth:`to_moduli`).
+
+        Parameters
+        ----------
+        moduli : array_like, shape (N, 2)
+            X1d, X1h in MPa.
+
+        Returns
+        -------
+        ndarray, shape (N, d)
+        """
 
     def range_note(self) -> str:
-        """What sets ``pressure_range``, for error messages."""
+        """What sets ``pressure_range``, for error messages.
+
+        Returns
+        -------
+        str
+        """
 
 
 def _is_scale_free(path: Path) -> bool:
@@ -130,9 +170,25 @@ def _read_space(space_path, bottom):
 class LoadedSpace:
     """A simulated space read once for many identifications (a study).
 
-    ``spaces`` maps probe (mm) to the space of that probe in either layout (a
-    :class:`GriddedSpace` or a :class:`NeoHookeanSlice`: both are
-    :class:`ProbeSpace`); ``info`` describes the file for the outputs.
+    Parameters
+    ----------
+    spaces : dict
+        Probe (mm) -> the space of that probe in either layout (a
+        :class:`GriddedSpace` or a :class:`NeoHookeanSlice`: both are
+        :class:`ProbeSpace`).
+    info : dict
+        Describes the file for the outputs (path, SHA-256, source, ...).
+    p_range : (float, float), optional
+        Pressures (mbar) a curve may span; None: each probe's own.
+    bottom : str
+        Bottom condition of the curves.
+    rays : RaySpace, optional
+        The neo-Hookean ray space of a scale-free space (None for a grid).
+    geometry : Geometry, optional
+        The measurement's layers (default: the paper's 1 mm each).
+    on_demand : OnDemandRays, optional
+        Solver of rays for a probe or layers the scale-free space lacks (None:
+        refused).
     """
 
     def __init__(self, spaces: dict, info: dict, p_range=None, bottom: str = "fixed",
@@ -147,6 +203,18 @@ class LoadedSpace:
 
     @classmethod
     def given(cls, spaces: dict, bottom: str = "fixed") -> "LoadedSpace":
+        """A space built in memory (no file).
+
+        Parameters
+        ----------
+        spaces : dict
+            Probe (mm) -> :class:`ProbeSpace`.
+        bottom : str
+
+        Returns
+        -------
+        LoadedSpace
+        """
         return cls(spaces, {"path": None, "sha256": None, "name": "given in memory"},
                    None, bottom)
 
@@ -156,12 +224,32 @@ class LoadedSpace:
         return None if self.rays is not None else list(self.spaces)
 
     def at(self, geometry: Geometry) -> "LoadedSpace":
-        """This space for a measurement with layers ``geometry`` (shares its caches)."""
+        """This space for a measurement with its own layers (shares its caches).
+
+        Parameters
+        ----------
+        geometry : Geometry
+
+        Returns
+        -------
+        LoadedSpace
+        """
         return LoadedSpace(self.spaces, self.info, self._p_range, self.bottom, self.rays,
                            geometry, self.on_demand, self._shared)
 
     def notes(self, probes) -> list:
-        """What the geometry of :meth:`probe` assumed or solved, for the outputs."""
+        """What the geometry of :meth:`probe` assumed or solved, for the outputs.
+
+        Parameters
+        ----------
+        probes : iterable of float
+            The probes (mm) asked for.
+
+        Returns
+        -------
+        list of str
+            Each note once.
+        """
         out = []
         for p in probes:
             for n in self._shared.get(("notes", float(p), self._geometry_key()), []):
@@ -179,6 +267,17 @@ class LoadedSpace:
         On the scale-free space, any aperture of :data:`APERTURE_RANGE_MM` and any
         layers: rays the space lacks are solved on demand if :attr:`on_demand`
         allows it, else an InputError says how.
+
+        Parameters
+        ----------
+        p : float
+            Aperture diameter (mm).
+
+        Returns
+        -------
+        ProbeSpace
+            A :class:`GriddedSpace` or a :class:`NeoHookeanSlice` (shared by every
+            measurement at this probe and geometry).
         """
         if self.rays is None:
             for q, s in self.spaces.items():
@@ -209,20 +308,49 @@ class LoadedSpace:
         return self._shared[key]
 
     def check_probes(self, probes) -> list:
-        """The probes (mm) as floats, each checked against the space."""
+        """The probes as floats, each checked against the space (:meth:`probe`).
+
+        Parameters
+        ----------
+        probes : iterable of float
+
+        Returns
+        -------
+        list of float
+        """
         needed = [float(p) for p in probes]
         for p in needed:
             self.probe(p)
         return needed
 
     def pressure_range(self, probes) -> tuple:
+        """Pressures (mbar) a curve at these probes may span.
+
+        Parameters
+        ----------
+        probes : iterable of float
+
+        Returns
+        -------
+        (float, float)
+            The range common to the probes (the file's own, for a grid).
+        """
         if self._p_range is not None:
             return self._p_range
         ranges = [self.probe(p).pressure_range for p in probes]
         return max(r[0] for r in ranges), min(r[1] for r in ranges)
 
     def range_note(self, probes) -> str:
-        """What sets :meth:`pressure_range`, for the loader's error."""
+        """What sets :meth:`pressure_range`, for the loader's error.
+
+        Parameters
+        ----------
+        probes : iterable of float
+
+        Returns
+        -------
+        str
+        """
         notes = [self.probe(p).range_note() for p in probes]
         return next((n for n in notes if "scale-free" in n), notes[0])
 
@@ -247,8 +375,16 @@ def load_space(space_path=None, bottom: str = "fixed", *, solve_on_demand: bool 
         layer thicknesses the space lacks (16 FE rays a probe, cached in
         ``cache_dir``; :class:`skinsuction.space.OnDemandRays`). False refuses them.
     cache_dir : path-like, optional
+        Where rays solved on demand are kept (default
+        :func:`skinsuction.space.default_cache_dir`).
     workers : int
         Processes for those solves.
+
+    Returns
+    -------
+    LoadedSpace
+        ``info`` says which space was read (``source``, ``description``, path,
+        SHA-256).
 
     Raises
     ------

@@ -61,6 +61,50 @@ def two_layer_skin(model, params):
     return skin, params.get("probe_mm", 6.0)
 
 
+def _solve_once(params: dict, pressures, settings: dict, label: str, budget=None,
+                stall_after=None):
+    """One solve of the FE model at ``params`` with the mesh ``settings``, logged.
+
+    A :class:`skinsuction.model.ParameterError` is raised naming the label, the
+    parameters and the settings; any other exception of the model becomes a
+    failed curve (all NaN, ``reason="exception: ..."``)."""
+    import time
+
+    from skinsuction import model
+    from skinsuction.model import Curve, simulate
+
+    # a stand-in model (workflow tests) may not define it: then nothing is refused
+    ParameterError = getattr(model, "ParameterError", ())  # noqa: N806
+
+    log.info("%s: %s, %d pressures, mesh %s", label, params, pressures.size, settings)
+    start = time.perf_counter()
+    try:
+        extra = {} if budget is None else {"iteration_budget": budget}
+        if stall_after is not None:
+            extra["stall_after"] = stall_after
+        skin, probe = two_layer_skin(model, params)
+        curve = simulate(skin, probe, pressures_mbar=pressures, mesh=settings, **extra)
+    except ParameterError as err:
+        # refused parameters or mesh settings are the configuration's error, not a
+        # non-converged point: the job fails, loudly, naming them
+        raise ParameterError(f"{label}: the model refuses {params} with mesh "
+                             f"{settings}: {err}") from None
+    except Exception as err:  # the model promises not to raise; record it if it does
+        log.exception("the model raised at %s", label)
+        curve = Curve(
+            pressure_mbar=pressures,
+            deflection_mm=np.full(pressures.shape, np.nan),
+            converged=False,
+            last_converged_mbar=float("nan"),
+            reason=f"exception: {type(err).__name__}: {err}",
+            seconds=time.perf_counter() - start,
+        )
+    log.info("%s: converged=%s last=%s mbar reason=%r newton=%s dofs=%s %.1f s", label,
+             curve.converged, curve.last_converged_mbar, curve.reason,
+             curve.newton_iterations, curve.dofs, curve.seconds)
+    return curve
+
+
 def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None, fallback=None,
                          label: str = "model", splice: bool = False):
     """Solve the FE model, then the fallback meshes in order while it stops early.
@@ -80,6 +124,24 @@ def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None,
     lower load that the default converges.  The scale-free space and its checks
     splice; the paper grid keeps whole fallback curves.
 
+    Parameters
+    ----------
+    params : dict
+        The grid point's or ray's keywords (:func:`two_layer_skin`: ``x1d, x1h``
+        and optionally ``x2d, x2h, t_d, t_h, bottom, prestretch, probe_mm``), as
+        its id spells them.
+    pressures_mbar : sequence of float
+        Pressures of the curve, ascending from 0.
+    mesh : dict, optional
+        Mesh and solver settings of the first solve.
+    fallback : dict or list of dict, optional
+        Settings that replace those of ``mesh`` for each further solve (see
+        :func:`compute_point`).
+    label : str
+        Names the solve in the log and in errors.
+    splice : bool
+        Splice a fallback's curve onto the first solve's (above).
+
     Returns
     -------
     (Curve, int, str or None)
@@ -89,44 +151,11 @@ def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None,
         when a fallback's curve was kept.
     """
     import dataclasses
-    import time
-
-    from skinsuction import model
-    from skinsuction.model import Curve, simulate
-
-    # a stand-in model (workflow tests) may not define it: then nothing is refused
-    ParameterError = getattr(model, "ParameterError", ())  # noqa: N806
 
     pressures = np.asarray(pressures_mbar, dtype=float)
 
     def solve(settings, budget=None, stall_after=None):
-        log.info("%s: %s, %d pressures, mesh %s", label, params, pressures.size, settings)
-        start = time.perf_counter()
-        try:
-            extra = {} if budget is None else {"iteration_budget": budget}
-            if stall_after is not None:
-                extra["stall_after"] = stall_after
-            skin, probe = two_layer_skin(model, params)
-            curve = simulate(skin, probe, pressures_mbar=pressures, mesh=settings, **extra)
-        except ParameterError as err:
-            # refused parameters or mesh settings are the configuration's error, not a
-            # non-converged point: the job fails, loudly, naming them
-            raise ParameterError(f"{label}: the model refuses {params} with mesh "
-                                 f"{settings}: {err}") from None
-        except Exception as err:  # the model promises not to raise; record it if it does
-            log.exception("the model raised at %s", label)
-            curve = Curve(
-                pressure_mbar=pressures,
-                deflection_mm=np.full(pressures.shape, np.nan),
-                converged=False,
-                last_converged_mbar=float("nan"),
-                reason=f"exception: {type(err).__name__}: {err}",
-                seconds=time.perf_counter() - start,
-            )
-        log.info("%s: converged=%s last=%s mbar reason=%r newton=%s dofs=%s %.1f s", label,
-                 curve.converged, curve.last_converged_mbar, curve.reason,
-                 curve.newton_iterations, curve.dofs, curve.seconds)
-        return curve
+        return _solve_once(params, pressures, settings, label, budget, stall_after)
 
     curve = solve(dict(mesh or {}))
     first_reason, kept, spent = None, 0, curve.seconds

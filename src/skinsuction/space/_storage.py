@@ -92,6 +92,17 @@ SIGNIFICANT_DIGITS = 12
 def round_sig(value: float, digits: int = SIGNIFICANT_DIGITS) -> float:
     """``value`` rounded to ``digits`` significant digits (``-0.0`` becomes ``0.0``).
 
+    Parameters
+    ----------
+    value : float
+    digits : int
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
     >>> round_sig(0.001 + 10 * 0.009)
     0.091
     """
@@ -125,6 +136,16 @@ def point_id(params: dict) -> str:
     Numbers are written with 12 significant digits (``%.12g``), so the id is
     exact for grid values (which :func:`expand_axis` rounds to 12 digits).
 
+    Parameters
+    ----------
+    params : dict
+        The point's axes (:data:`AXES`, the two-layer keywords; those missing at
+        :data:`DEFAULTS`).
+
+    Returns
+    -------
+    str
+
     Examples
     --------
     >>> point_id(dict(probe_mm=6, bottom="fixed", x1d=0.08, x1h=1e-5,
@@ -145,6 +166,17 @@ def point_id(params: dict) -> str:
 def parse_point_id(pid: str) -> dict:
     """The grid point parameters encoded in a point id (inverse of :func:`point_id`).
 
+    Parameters
+    ----------
+    pid : str
+
+    Returns
+    -------
+    dict
+        One value per axis of :data:`AXES`.
+
+    Examples
+    --------
     >>> parse_point_id("p2_free_x1d0.08_x1h0.1_x2d0_x2h0_td1_th1.5")["t_h"]
     1.5
     """
@@ -198,6 +230,17 @@ def curve_frame(curve, params: dict) -> pd.DataFrame:
     ``curve`` is a :class:`skinsuction.model.Curve` (or any object with its
     attributes). Deflections beyond ``last_converged_mbar`` of a non-converged
     curve are set to NaN.
+
+    Parameters
+    ----------
+    curve : skinsuction.model.Curve
+    params : dict
+        The point's axes (:data:`AXES`; those missing at :data:`DEFAULTS`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns :data:`COLUMNS`.
     """
     p = np.asarray(curve.pressure_mbar, dtype=float)
     m = np.asarray(curve.deflection_mm, dtype=float).copy()
@@ -244,6 +287,11 @@ def write_curve(curve, params: dict, path, metadata: dict | None = None) -> Path
         Output file, conventionally ``results/curves/<point_id>.parquet``.
     metadata : dict, optional
         Extra JSON-able provenance stored with ``curve.info`` in the schema metadata.
+
+    Returns
+    -------
+    Path
+        The file written.
     """
     frame = curve_frame(curve, params)
     meta = {
@@ -266,6 +314,15 @@ def read_curve(path) -> tuple[pd.DataFrame, dict]:
     A file that cannot be read (truncated by a full disk or a copy, overwritten)
     raises :class:`CorruptCurveError` naming it: curve files are written
     atomically, so a killed job never leaves one; delete it and rerun.
+
+    Parameters
+    ----------
+    path : path-like
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+    metadata : dict
     """
     try:
         return _read_parquet(path)
@@ -277,7 +334,23 @@ def read_curve(path) -> tuple[pd.DataFrame, dict]:
 
 
 def read_curves(paths) -> tuple[pd.DataFrame, dict]:
-    """Concatenated rows of several curve files and their metadata by point id."""
+    """Concatenated rows of several curve files and their metadata by point id.
+
+    Parameters
+    ----------
+    paths : iterable of path-like
+
+    Returns
+    -------
+    frame : pandas.DataFrame
+    metadata : dict
+        ``{point_id: metadata}``.
+
+    Raises
+    ------
+    ValueError
+        If no file is given or a point is given twice.
+    """
     frames, metas = [], {}
     for path in paths:
         frame, meta = read_curve(path)
