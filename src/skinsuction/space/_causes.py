@@ -137,10 +137,12 @@ class Cause:
 
     @property
     def lower(self) -> float:
+        """The lowest coordinate simulated (``nodes[0]``)."""
         return self.nodes[0]
 
     @property
     def upper(self) -> float:
+        """The highest coordinate simulated (``nodes[-1]``)."""
         return self.nodes[-1]
 
     def to_axis(self, coordinate):
@@ -178,6 +180,7 @@ class Cause:
 
     @property
     def axis_nodes(self) -> np.ndarray:
+        """The nodes on the interpolation axis ``u`` (:meth:`to_axis`)."""
         return np.asarray(self.to_axis(np.asarray(self.nodes)), dtype=float)
 
     def value(self, coordinate, dermis_X1):

@@ -86,6 +86,7 @@ class ThicknessNuisance:
 
     @property
     def symbol(self) -> str:
+        """Name of the thickness in reports (``t_d``, ``t_h``)."""
         return self.keyword
 
     def thickness(self, delta):

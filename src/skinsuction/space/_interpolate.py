@@ -359,10 +359,12 @@ class SpaceInterpolant:
 
     @property
     def lower(self) -> np.ndarray:
+        """Lower bounds (X1d, X1h) of the candidates: the grid's."""
         return self.space.lower
 
     @property
     def upper(self) -> np.ndarray:
+        """Upper bounds (X1d, X1h) of the candidates: the grid's."""
         return self.space.upper
 
     def __call__(self, candidates, out=None) -> np.ndarray:

@@ -95,6 +95,7 @@ class RayInterpolant:
 
     @property
     def upper(self) -> np.ndarray:
+        """Upper bounds of theta: log10 X1d (the window's), log10 r[, u]."""
         s = self.space.spec
         hi = [math.log10(s.x1d_range[1]), math.log10(s.ratio_nodes[-1])]
         if self.d == 3:
@@ -359,6 +360,16 @@ class TabulatedInterpolant:
     iteration of the window focusing costs what it costs on the paper grid.
     Along log X1d the table is much finer than M varies (0.01 decades: M moves
     by about 2 % between nodes), so it adds an error far below the rays' own.
+
+    Parameters
+    ----------
+    space : RaySpace
+        The neo-Hookean space.
+    probe_mm : float
+    pressure_mbar : array_like (u,)
+        The measured pressures (mbar).
+    step : float
+        Spacing of the table in log10 X1d (decades).
 
     Attributes
     ----------

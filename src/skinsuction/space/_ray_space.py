@@ -65,10 +65,12 @@ class RaySpace:
 
     @property
     def name(self) -> str:
+        """``neo_hookean`` or the cause's name."""
         return BASELINE if self.cause is None else self.cause.name
 
     @property
     def probes_mm(self) -> tuple:
+        """The apertures (mm) the space has rays of, ascending."""
         return tuple(sorted(self.deflection_mm))
 
     def has_probe(self, probe_mm: float) -> bool:
