@@ -106,7 +106,6 @@ PRIVATE_IMPORT_DEBTS = {
     "skinsuction.cohort._run": {"skinsuction.measured._geometry", "skinsuction.diagnose._time",
                                 "skinsuction.diagnose._diagnose", "skinsuction.diagnose._report"},
     "skinsuction.identify._time_fit": {"skinsuction.measured._timecurve"},
-    "skinsuction.space._geometry": {"skinsuction.measured._geometry"},
     "skinsuction.diagnose._time": {"skinsuction.identify._time_fit"},
     "skinsuction.diagnose._report": {"skinsuction.figures._style"},
     "skinsuction.identify.measured_fit": {"skinsuction.figures._style"},
