@@ -22,9 +22,15 @@ For the multi-objective costs the paper defines no E; we use
   which is eq. 7 of the 2 mm curve at alpha = 1 and of the 6 mm curve at
   alpha = 0;
 * ratio (eqs. 11-12): eq. 7 applied to ``Gamma - Theta``, dimensionless.
+
+A fit in units of the noise (the diagnosis, the time curves) subclasses
+:class:`Chi2Objective`: its cost is chi^2 / 2, its E the RMS of the whitened
+residuals.  All of them are objectives of the fitting engine (:mod:`._engine`).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -39,6 +45,7 @@ __all__ = [
     "single_objective",
     "weighted_objective",
     "ratio_objective",
+    "Chi2Objective",
 ]
 
 MM_TO_UM = 1000.0
@@ -46,6 +53,15 @@ MM_TO_UM = 1000.0
 
 def cost(residuals) -> np.ndarray:
     """Eq. 4: ``J = 1/2 D^T D`` along the last axis; NaN -> +inf.
+
+    Parameters
+    ----------
+    residuals : array_like (..., u)
+        D, the differences between simulated and measured deflections.
+
+    Returns
+    -------
+    ndarray (...)
 
     Examples
     --------
@@ -60,6 +76,14 @@ def cost(residuals) -> np.ndarray:
 
 def correlation_error(residuals) -> np.ndarray:
     """Eq. 7: ``E = (1/u) sqrt(sum_t d_t^2)`` along the last axis (units of ``d``).
+
+    Parameters
+    ----------
+    residuals : array_like (..., u)
+
+    Returns
+    -------
+    ndarray (...)
 
     Examples
     --------
@@ -310,14 +334,44 @@ class RatioObjective:
 
 
 def single_objective(space: GriddedSpace, curve, nan_policy: str = "shift") -> SingleObjective:
-    """Single-probe objective (eq. 4); see :class:`SingleObjective`."""
+    """Single-probe objective (eq. 4); see :class:`SingleObjective`.
+
+    Parameters
+    ----------
+    space : GriddedSpace or NeoHookeanSlice
+        The probe's simulated space.
+    curve : MeasuredCurve or (pressure_mbar, deflection_mm)
+        The measured curve.
+    nan_policy : {"shift", "strict"}
+        Stencils near non-converged points (see :class:`SingleObjective`).
+
+    Returns
+    -------
+    SingleObjective
+    """
     return SingleObjective(space, curve, nan_policy)
 
 
 def weighted_objective(space_2mm: GriddedSpace, curve_2mm, space_6mm: GriddedSpace,
                        curve_6mm, alpha: float = 0.5,
                        nan_policy: str = "shift") -> WeightedObjective:
-    """Weighted two-probe objective (eq. 10, ``alpha`` on 2 mm); see :class:`WeightedObjective`."""
+    """Weighted two-probe objective (eq. 10, ``alpha`` on 2 mm); see :class:`WeightedObjective`.
+
+    Parameters
+    ----------
+    space_2mm, curve_2mm : GriddedSpace, curve
+        The smaller probe's space and curve.
+    space_6mm, curve_6mm : GriddedSpace, curve
+        The larger probe's.
+    alpha : float
+        Weight of the smaller probe, in [0, 1].
+    nan_policy : str
+        As for :func:`single_objective`.
+
+    Returns
+    -------
+    WeightedObjective
+    """
     return WeightedObjective(
         SingleObjective(space_2mm, curve_2mm, nan_policy),
         SingleObjective(space_6mm, curve_6mm, nan_policy),
@@ -327,5 +381,81 @@ def weighted_objective(space_2mm: GriddedSpace, curve_2mm, space_6mm: GriddedSpa
 
 def ratio_objective(space_2mm: GriddedSpace, curve_2mm, space_6mm: GriddedSpace,
                     curve_6mm, nan_policy: str = "shift") -> RatioObjective:
-    """Ratio objective (eqs. 11-12); see :class:`RatioObjective`."""
+    """Ratio objective (eqs. 11-12); see :class:`RatioObjective`.
+
+    Parameters
+    ----------
+    space_2mm, curve_2mm : GriddedSpace, curve
+        The smaller probe's space and curve.
+    space_6mm, curve_6mm : GriddedSpace, curve
+        The larger probe's.
+    nan_policy : str
+        As for :func:`single_objective`.
+
+    Returns
+    -------
+    RatioObjective
+    """
     return RatioObjective(space_2mm, curve_2mm, space_6mm, curve_6mm, nan_policy)
+
+
+class Chi2Objective:
+    """chi^2 / 2 of residuals in units of their sd: the objective of a least-squares fit.
+
+    A subclass gives :meth:`blocks`, the whitened residuals of the candidates in
+    blocks (e.g. one per probe: chi^2 adds the blocks' sums of squares in their
+    order), and may give :meth:`prior_residuals`, the terms of a Gaussian prior
+    (added to chi^2, not counted in the ``n`` points).
+
+    Parameters
+    ----------
+    lower, upper : array_like (k,)
+        The box of the parameters (the simulated space's).
+    n : int
+        The points fitted (the ``n`` of E = sqrt(chi^2 / n)).
+    chunk_values : int, optional
+        Evaluate the cost ``max(8, chunk_values // n)`` candidates at a time (the
+        memory of long curves); None: all in one call.
+    """
+
+    error_unit = "1"
+
+    def __init__(self, lower, upper, n: int, chunk_values: int | None = None):
+        self.lower, self.upper = lower, upper
+        self.n = int(n)
+        self.chunk_values = chunk_values
+
+    def blocks(self, candidates: np.ndarray) -> list:
+        """``[(N, n_i)]``: the residuals of the ``(N, k)`` candidates over their sd."""
+        raise NotImplementedError
+
+    def prior_residuals(self, candidates: np.ndarray) -> np.ndarray:
+        """``(N, m)`` terms of a Gaussian prior (none by default)."""
+        return np.zeros((candidates.shape[0], 0))
+
+    def __call__(self, candidates) -> np.ndarray:
+        """chi^2 / 2 of each candidate, ``(N,)``; +inf where a residual is not finite."""
+        theta = np.atleast_2d(np.asarray(candidates, dtype=float))
+        size = theta.shape[0]
+        step = size if self.chunk_values is None else max(8, self.chunk_values // max(self.n, 1))
+        out = np.empty(size)
+        for i in range(0, size, max(step, 1)):
+            t = theta[i:i + step]
+            chi2 = 0.0
+            for r in self.blocks(t):
+                chi2 = chi2 + np.einsum("nt,nt->n", r, r)
+            prior = self.prior_residuals(t)
+            if prior.shape[1]:
+                chi2 = chi2 + np.sum(prior ** 2, axis=1)
+            out[i:i + step] = 0.5 * chi2
+        out[~np.isfinite(out)] = np.inf
+        return out
+
+    def residuals(self, candidates) -> np.ndarray:
+        """``(N, r)``: every block and the prior's terms; NaN or inf where there is no curve."""
+        theta = np.atleast_2d(np.asarray(candidates, dtype=float))
+        return np.concatenate(list(self.blocks(theta)) + [self.prior_residuals(theta)], axis=1)
+
+    def error(self, cost) -> float:
+        """The RMS of the whitened residuals, ``sqrt(2 cost / n)``."""
+        return math.sqrt(2.0 * cost / self.n)

@@ -1,4 +1,4 @@
-"""A local polish of a window-focusing estimate: bounded least squares from it.
+"""The engine's local step: bounded least squares from a point (the polish).
 
 The window focusing (paper section 2.4) stops when the best E of two successive
 iterations agree to C.  In a long, flat valley of the cost (the 6 mm probe alone
@@ -7,6 +7,11 @@ window can collapse on a stretch of the valley away from the minimum: at the
 paper's test point the 6 mm runs stop at E = 0.6-1.6 µm, X1d 50 % too high, while
 E at the truth is 0.006 µm.  A trust-region least-squares from the estimate,
 within the bounds of the space, walks down the valley to the minimum.
+
+One solver and one set of settings (:data:`POLISH`) for every fit; a fit changes
+them by keyword (the time curves: :data:`skinsuction.identify._time_fit.TIME_POLISH`,
+their own Jacobian and a looser tolerance).  :func:`polish_run` reports the start,
+the solver's end point and both costs; :func:`polish` returns the better point.
 
 Examples
 --------
@@ -24,33 +29,129 @@ Examples
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["polish"]
+from ._window_focusing import window_of
+
+__all__ = ["POLISH", "Polished", "polish", "polish_run"]
+
+#: The polish's settings (the ramps and the diagnosis): at most ``max_nfev`` residual
+#: evaluations, ``tol`` for the solver's xtol, ftol and gtol, forward differences of
+#: ``diff_step`` (relative) unless ``jacobian`` (the objective's own ``jacobian``),
+#: non-finite residuals (a candidate without a curve) replaced by ``nonfinite``.
+POLISH = {"max_nfev": 200, "tol": 1e-12, "diff_step": 1e-7, "jacobian": False,
+          "nonfinite": 1e3}
+
+#: The trust region's scale of each coordinate, as a fraction of the box's width.
+X_SCALE = 0.05
 
 
-def polish(objective, theta0, max_nfev: int = 200) -> np.ndarray:
-    """The best fit near ``theta0`` within ``objective.lower/upper``.
+@dataclass(frozen=True)
+class Polished:
+    """What one polish did.
 
-    ``objective`` needs ``residuals(candidates) -> (N, r)`` and
-    ``__call__(candidates) -> cost``.  Non-finite residuals (a candidate without
-    a curve) count as large.  Returns ``theta0`` (clipped to the bounds) if the
-    polish does not lower the cost.
+    Attributes
+    ----------
+    start : ndarray (k,)
+        The start, clipped to the bounds.
+    start_cost : float
+        Its cost.
+    x : ndarray (k,)
+        The solver's end point (the start if the solver refused it).
+    cost : float
+        Its cost.
+    ran : bool
+        False if the solver refused the start (then ``x`` is the start).
+    nfev : int
+        Residual evaluations of the solver.
+    """
+
+    start: np.ndarray
+    start_cost: float
+    x: np.ndarray
+    cost: float
+    ran: bool
+    nfev: int = 0
+
+    @property
+    def best(self) -> np.ndarray:
+        """The end point if its cost is not higher than the start's, else the start."""
+        return self.x if self.cost <= self.start_cost else self.start
+
+
+def polish_run(objective, x0, bounds=None, **settings) -> Polished:
+    """Bounded least squares (trust region) from ``x0``: the engine's local step.
+
+    Parameters
+    ----------
+    objective : callable
+        ``objective(candidates (N, k)) -> cost (N,)`` with ``residuals(candidates
+        (N, k)) -> (N, r)`` whose half squared norm is the cost, ``lower`` and
+        ``upper`` when ``bounds`` is None, and ``jacobian(x (k,)) -> (r, k)`` when
+        ``settings["jacobian"]``.
+    x0 : array_like (k,)
+        The start; clipped to the bounds.
+    bounds : (lower, upper), optional
+        Default the objective's ``lower``, ``upper``.
+    **settings
+        Override :data:`POLISH` (``max_nfev``, ``tol``, ``diff_step``, ``jacobian``,
+        ``nonfinite``).
+
+    Returns
+    -------
+    Polished
     """
     from scipy.optimize import least_squares
 
-    lo, hi = np.asarray(objective.lower, float), np.asarray(objective.upper, float)
-    x0 = np.clip(np.asarray(theta0, dtype=float).reshape(-1), lo, hi)
+    unknown = set(settings) - set(POLISH)
+    if unknown:
+        raise TypeError(f"unknown polish settings {sorted(unknown)}; known: {sorted(POLISH)}")
+    s = {**POLISH, **settings}
+    lo, hi = window_of(objective, bounds)
+    x0 = np.clip(np.asarray(x0, dtype=float).reshape(-1), lo, hi)
+    bad = float(s["nonfinite"])
 
     def residuals(t):
         r = np.asarray(objective.residuals(t[None, :])[0], dtype=float)
-        return np.where(np.isfinite(r), r, 1e3)
+        return np.where(np.isfinite(r), r, bad)
 
+    def cost_of(t):
+        return float(objective(np.asarray(t)[None, :])[0])
+
+    tol = float(s["tol"])
     try:
-        sol = least_squares(residuals, x0, bounds=(lo, hi), method="trf",
-                            x_scale=np.maximum(hi - lo, 1e-12) * 0.05, diff_step=1e-7,
-                            xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=max_nfev)
-    except ValueError:
-        return x0
-    c0, c1 = (float(objective(np.asarray(t)[None, :])[0]) for t in (x0, sol.x))
-    return sol.x if c1 <= c0 else x0
+        sol = least_squares(residuals, x0, jac=objective.jacobian if s["jacobian"] else "2-point",
+                            bounds=(lo, hi), method="trf",
+                            x_scale=np.maximum(hi - lo, 1e-12) * X_SCALE,
+                            diff_step=s["diff_step"], xtol=tol, ftol=tol, gtol=tol,
+                            max_nfev=int(s["max_nfev"]))
+    except ValueError:  # e.g. the residuals at the start are not finite
+        c0 = cost_of(x0)
+        return Polished(x0, c0, x0, c0, False)
+    c0, c1 = cost_of(x0), cost_of(sol.x)
+    return Polished(x0, c0, sol.x, c1, True, int(sol.nfev))
+
+
+def polish(objective, x0, bounds=None, **settings) -> np.ndarray:
+    """The best fit near ``x0`` within the bounds: :func:`polish_run`'s better point.
+
+    Parameters
+    ----------
+    objective : callable
+        As for :func:`polish_run`: costs, ``residuals`` and the bounds.
+    x0 : array_like (k,)
+        The start (e.g. the median of the window focusing runs).
+    bounds : (lower, upper), optional
+        Default the objective's ``lower``, ``upper``.
+    **settings
+        Override :data:`POLISH`.
+
+    Returns
+    -------
+    ndarray (k,)
+        The solver's end point, or ``x0`` (clipped to the bounds) if the polish
+        does not lower the cost or the solver refused the start.
+    """
+    return polish_run(objective, x0, bounds, **settings).best

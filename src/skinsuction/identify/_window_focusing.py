@@ -12,6 +12,11 @@ iterations run.)  Candidates with cost +inf (non-converged parts of the space)
 are never among the Nb best unless fewer than Nb candidates are finite, in which
 case only the finite ones define the window; if none is finite the
 identification fails with :class:`IdentificationError`.
+
+:func:`focus` is this run as a step of the fitting engine (:mod:`._engine`): the
+window and the random generator are its arguments.  :func:`window_focusing` is the
+same run under the paper's name, the seed a keyword; :func:`identify_repeated`
+repeats it from independent seeds (paper: 100 runs).
 """
 
 from __future__ import annotations
@@ -28,9 +33,12 @@ __all__ = [
     "IterationState",
     "WindowFocusingResult",
     "RepeatedIdentification",
+    "focus",
     "window_focusing",
     "identify_repeated",
+    "repeated_runs",
     "samples_for",
+    "window_of",
 ]
 
 
@@ -52,6 +60,17 @@ def samples_for(rho: float, e: float) -> int:
 
     N uniform samples reach the global minimum with accuracy ``e`` (fraction of
     the window) with probability ``rho``.
+
+    Parameters
+    ----------
+    rho : float
+        Probability, in (0, 1).
+    e : float
+        Accuracy as a fraction of the window, in (0, 1).
+
+    Returns
+    -------
+    int
 
     Examples
     --------
@@ -131,7 +150,31 @@ class WindowFocusingResult:
         return float(self.E) if self.E_unit == "µm" else math.nan
 
 
-def _bounds(objective, bounds):
+def window_of(objective, bounds=None) -> tuple:
+    """The box ``(lower, upper)`` searched: ``bounds`` or the objective's own.
+
+    Parameters
+    ----------
+    objective : object
+        With ``lower`` and ``upper`` (length k) when ``bounds`` is None.
+    bounds : (lower, upper), optional
+        The box; each of length k.
+
+    Returns
+    -------
+    lower, upper : ndarray (k,)
+        Float copies.
+
+    Raises
+    ------
+    ValueError
+        Bounds of different or no dimension, not finite, or ``lower > upper``.
+
+    Examples
+    --------
+    >>> window_of(None, ([0, 1], [2, 3]))
+    (array([0., 1.]), array([2., 3.]))
+    """
     if bounds is None:
         lower, upper = objective.lower, objective.upper
     else:
@@ -145,30 +188,48 @@ def _bounds(objective, bounds):
     return lower, upper
 
 
-def window_focusing(
+def _iteration(objective, rng, lower, upper, n_samples: int, n_best: int, j: int):
+    """Iteration j: N samples in the window (eq. 5), their costs, the Nb best with a
+    finite cost, best first."""
+    samples = lower + (upper - lower) * rng.random((n_samples, lower.size))  # eq. 5
+    costs = np.asarray(objective(samples), dtype=float)
+    best = _n_smallest(costs, n_best)
+    best = best[np.isfinite(costs[best])]
+    if best.size == 0:
+        raise IdentificationError(
+            f"iteration {j}: all {n_samples} candidates in the window "
+            f"{lower.tolist()}..{upper.tolist()} have an infinite cost "
+            "(non-converged part of the simulated space?)"
+        )
+    return samples, costs, best
+
+
+def focus(
     objective,
-    *,
-    seed,
     bounds=None,
+    rng=None,
+    *,
     n_samples: int = 1000,
     n_best: int = 20,
     tolerance: float = 1e-6,
     max_iter: int = 200,
     callback: Callable[[IterationState], None] | None = None,
 ) -> WindowFocusingResult:
-    """Identify (X1d, X1h) by window focusing (paper section 2.4).
+    """One window focusing run (paper section 2.4): the engine's search step.
 
     Parameters
     ----------
     objective : callable
-        ``objective(candidates (N, d)) -> cost (N,)`` with attributes ``lower``,
-        ``upper`` (length d), ``error(cost)`` and ``error_unit`` (see
-        ``_objectives``).  The paper's problems have d = 2, (X1d, X1h); any
-        d >= 1 works (e.g. the extended models of :mod:`skinsuction.diagnose`).
-    seed : int, numpy.random.SeedSequence or numpy.random.Generator
-        Source of the random samples; required, so every run is reproducible.
+        ``objective(candidates (N, k)) -> cost (N,)``, +inf where there is no
+        curve; with ``error(cost)`` (E, eq. 7) and ``error_unit``, and ``lower``,
+        ``upper`` when ``bounds`` is None (the protocol of :mod:`._engine`).  The
+        paper's problems have k = 2, (X1d, X1h); any k >= 1 works.
     bounds : (lower, upper), optional
-        Initial window; default the bounds of the simulated space.
+        The first window; default the objective's ``lower``, ``upper`` (the
+        bounds of the simulated space).
+    rng : int, numpy.random.SeedSequence or numpy.random.Generator
+        Source of the random samples (``numpy.random.default_rng(rng)``); required,
+        so every run is reproducible.
     n_samples : int
         N, candidates per iteration (paper: 1000; see :func:`samples_for`).
     n_best : int
@@ -184,38 +245,40 @@ def window_focusing(
     -------
     WindowFocusingResult
 
+    Raises
+    ------
+    IdentificationError
+        Every candidate of an iteration has an infinite cost.
+
     Examples
     --------
-    >>> from skinsuction.identify import analytic_surrogate_space, single_objective
-    >>> from skinsuction.space import evaluate
-    >>> s6 = analytic_surrogate_space(6.0)
-    >>> curve = (s6.pressure_mbar, evaluate(s6, [[0.0055, 0.00041]])[0])
-    >>> r = window_focusing(single_objective(s6, curve), seed=1)
-    >>> r.converged, r.estimate.round(6).tolist()
-    (True, [0.0055, 0.00041])
+    >>> import numpy as np
+    >>> class Bowl:  # cost and E: squared distance to (0.3, 0.6) in the unit box
+    ...     lower, upper, error_unit = np.zeros(2), np.ones(2), "1"
+    ...     def __call__(self, t):
+    ...         return ((t - [0.3, 0.6]) ** 2).sum(axis=1)
+    ...     def error(self, cost):
+    ...         return cost
+    >>> r = focus(Bowl(), None, np.random.default_rng(0), tolerance=1e-12)
+    >>> r.converged, r.estimate.round(4).tolist()
+    (True, [0.3, 0.6])
     """
+    if rng is None:
+        raise TypeError("focus needs a seed or a random generator (rng): every run is "
+                        "reproducible")
     n_samples, n_best, max_iter = int(n_samples), int(n_best), int(max_iter)
     if not 1 <= n_best <= n_samples:
         raise ValueError(f"need 1 <= n_best <= n_samples, got {n_best} and {n_samples}")
     if max_iter < 1 or not tolerance >= 0:
         raise ValueError("max_iter must be >= 1 and tolerance >= 0")
     t0 = time.perf_counter()
-    rng = np.random.default_rng(seed)
-    lower, upper = _bounds(objective, bounds)
+    rng = np.random.default_rng(rng)
+    lower, upper = window_of(objective, bounds)
     windows = [(lower, upper)]
     e_history = []
     converged = False
     for j in range(1, max_iter + 1):
-        samples = lower + (upper - lower) * rng.random((n_samples, lower.size))  # eq. 5
-        costs = np.asarray(objective(samples), dtype=float)
-        best = _n_smallest(costs, n_best)
-        best = best[np.isfinite(costs[best])]
-        if best.size == 0:
-            raise IdentificationError(
-                f"iteration {j}: all {n_samples} candidates in the window "
-                f"{lower.tolist()}..{upper.tolist()} have an infinite cost "
-                "(non-converged part of the simulated space?)"
-            )
+        samples, costs, best = _iteration(objective, rng, lower, upper, n_samples, n_best, j)
         x_best, j_best = samples[best[0]], float(costs[best[0]])
         e_j = float(objective.error(j_best))
         e_history.append(e_j)
@@ -240,13 +303,45 @@ def window_focusing(
     )
 
 
+def window_focusing(objective, *, seed, bounds=None, **options) -> WindowFocusingResult:
+    """Identify (X1d, X1h) by window focusing (paper section 2.4): :func:`focus`.
+
+    Parameters
+    ----------
+    objective : callable
+        As for :func:`focus` (e.g. :func:`skinsuction.identify.single_objective`).
+    seed : int, numpy.random.SeedSequence or numpy.random.Generator
+        Source of the random samples; required, so every run is reproducible.
+    bounds : (lower, upper), optional
+        Initial window; default the bounds of the simulated space.
+    **options
+        ``n_samples`` (N), ``n_best`` (Nb), ``tolerance`` (C), ``max_iter``,
+        ``callback``: see :func:`focus`.
+
+    Returns
+    -------
+    WindowFocusingResult
+
+    Examples
+    --------
+    >>> from skinsuction.identify import analytic_surrogate_space, single_objective
+    >>> from skinsuction.space import evaluate
+    >>> s6 = analytic_surrogate_space(6.0)
+    >>> curve = (s6.pressure_mbar, evaluate(s6, [[0.0055, 0.00041]])[0])
+    >>> r = window_focusing(single_objective(s6, curve), seed=1)
+    >>> r.converged, r.estimate.round(6).tolist()
+    (True, [0.0055, 0.00041])
+    """
+    return focus(objective, bounds, seed, **options)
+
+
 @dataclass(frozen=True)
 class RepeatedIdentification:
     """Many independent window focusing runs on one objective (paper: 100).
 
     Attributes
     ----------
-    estimates : ndarray (R, 2)
+    estimates : ndarray (R, k)
     E : ndarray (R,)
     iterations : ndarray (R,)
     converged : ndarray of bool (R,)
@@ -259,8 +354,18 @@ class RepeatedIdentification:
     converged: np.ndarray
     results: list = field(repr=False)
 
+    @classmethod
+    def of(cls, results: list) -> "RepeatedIdentification":
+        """The runs ``results`` (list of :class:`WindowFocusingResult`) as one record."""
+        return cls(estimates=np.array([r.estimate for r in results]),
+                   E=np.array([r.E for r in results]),
+                   iterations=np.array([r.iterations for r in results]),
+                   converged=np.array([r.converged for r in results]),
+                   results=list(results))
+
     @property
     def mean(self) -> np.ndarray:
+        """Mean of the estimates, (k,)."""
         return self.estimates.mean(axis=0)
 
     @property
@@ -298,12 +403,64 @@ class RepeatedIdentification:
         }
 
 
-def identify_repeated(objective, repeats: int = 100, seed=0, **options) -> RepeatedIdentification:
-    """Run :func:`window_focusing` ``repeats`` times with independent seeds.
+def repeated_runs(objective, bounds, repeats: int, seed, options: dict,
+                  skip_failed: bool = False) -> list:
+    """The window focusing runs from ``SeedSequence(seed).spawn(repeats)``, in order.
 
-    The seeds are ``numpy.random.SeedSequence(seed).spawn(repeats)``, so the
-    whole set is reproducible from ``seed``.  ``options`` go to
-    :func:`window_focusing` (``bounds``, ``n_samples``, ``n_best``, ...).
+    Parameters
+    ----------
+    objective : callable
+        See :func:`focus`.
+    bounds : (lower, upper) or None
+        The first window of every run.
+    repeats : int
+        Runs, >= 0.
+    seed : int or numpy.random.SeedSequence
+        The root of the runs' seeds.
+    options : dict
+        Options of :func:`focus`.
+    skip_failed : bool
+        Leave out a run that raises :class:`IdentificationError` (else raise it).
+
+    Returns
+    -------
+    list of WindowFocusingResult
+    """
+    root = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
+    runs = []
+    for s in root.spawn(int(repeats)):
+        try:
+            runs.append(focus(objective, bounds, s, **options))
+        except IdentificationError:
+            if not skip_failed:
+                raise
+    return runs
+
+
+def identify_repeated(objective, repeats: int = 100, seed=0, **options) -> RepeatedIdentification:
+    """Run :func:`focus` ``repeats`` times with independent seeds.
+
+    Parameters
+    ----------
+    objective : callable
+        See :class:`Objective`.
+    repeats : int
+        Runs, >= 1 (paper: 100).
+    seed : int or numpy.random.SeedSequence
+        The runs' seeds are ``SeedSequence(seed).spawn(repeats)``: the whole set is
+        reproducible from it.
+    **options
+        ``bounds`` and the options of :func:`focus` (``n_samples``, ``n_best``,
+        ``tolerance``, ``max_iter``, ``callback``).
+
+    Returns
+    -------
+    RepeatedIdentification
+
+    Raises
+    ------
+    IdentificationError
+        A run finds no candidate with a finite cost.
 
     Examples
     --------
@@ -318,13 +475,6 @@ def identify_repeated(objective, repeats: int = 100, seed=0, **options) -> Repea
     repeats = int(repeats)
     if repeats < 1:
         raise ValueError("repeats must be >= 1")
-    root = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
-    seeds = root.spawn(repeats)
-    results = [window_focusing(objective, seed=s, **options) for s in seeds]
-    return RepeatedIdentification(
-        estimates=np.array([r.estimate for r in results]),
-        E=np.array([r.E for r in results]),
-        iterations=np.array([r.iterations for r in results]),
-        converged=np.array([r.converged for r in results]),
-        results=results,
-    )
+    options = dict(options)
+    bounds = options.pop("bounds", None)
+    return RepeatedIdentification.of(repeated_runs(objective, bounds, repeats, seed, options))
