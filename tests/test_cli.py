@@ -475,3 +475,25 @@ def test_export_inp_refuses_a_prestretched_skin_in_one_line(capsys, tmp_path):
                         tmp_path / "e.inp"], capsys)
     assert code == 2 and err.count("\n") == 1 and "pre-stretch" in err
     assert not (tmp_path / "e.inp").exists()
+
+
+def test_identify_takes_the_layers_from_a_skin_file(tmp_path, capsys):
+    """--skin gives the dermis and hypodermis thicknesses (options override them); a
+    stack the spaces do not hold is refused in one line that names its layers."""
+    import argparse
+
+    from skinsuction.commands._common import thickness_from_args
+    from skinsuction.model import Skin
+
+    path = Skin.two_layer(0.05, 5e-4, t_d=1.3, t_h=2.7).write(tmp_path / "skin.yaml")
+    args = argparse.Namespace(skin=str(path), dermis_thickness_mm=None,
+                              dermis_thickness_sd_mm=0.1, hypodermis_thickness_mm=None)
+    assert thickness_from_args(args) == {"dermis_thickness_mm": 1.3,
+                                         "hypodermis_thickness_mm": 2.7,
+                                         "dermis_thickness_sd_mm": 0.1}
+    args.dermis_thickness_mm = 1.1
+    assert thickness_from_args(args)["dermis_thickness_mm"] == 1.1
+    three = Skin.read(path).with_layer_on_top("superficial", 0.1, 0.02).write(tmp_path / "3.yaml")
+    code, _, err = run(["identify", str(ROOT / "data" / "example_measured.csv"), "--skin",
+                        three, "--objective", "weighted", "--out", tmp_path / "out"], capsys)
+    assert code == 2 and err.count("\n") == 1 and "superficial" in err

@@ -286,6 +286,12 @@ def add_geometry_arguments(p: argparse.ArgumentParser) -> None:
         "measured on the same site (ultrasound, OCT); they override the file's header "
         "lines (# dermis_thickness_mm: 1.3). Not given: the paper's 1 mm, stated in the "
         "outputs as an assumption")
+    g.add_argument("--skin", default=None, metavar="FILE",
+                   help="the subject's skin as a YAML or JSON file (docs/model.md): its "
+                        "dermis and hypodermis thicknesses are taken as given (the options "
+                        "below override them); its moduli are what is fitted, so they are "
+                        "not used. The spaces hold the paper's two layers over a fixed "
+                        "bottom: another stack is refused")
     g.add_argument("--dermis-thickness-mm", type=positive, default=None, metavar="MM",
                    help="thickness of the dermis with the epidermis, mm")
     g.add_argument("--dermis-thickness-sd-mm", type=positive, default=None, metavar="MM",
@@ -313,6 +319,36 @@ def thickness_from_args(args: argparse.Namespace) -> dict:
     Returns
     -------
     dict
-        The thicknesses given (keys of :data:`THICKNESS_KEYS`); empty if none.
+        The thicknesses given (keys of :data:`THICKNESS_KEYS`); empty if none. A
+        ``--skin`` file gives the dermis and hypodermis thicknesses, the options
+        override it.
+
+    Raises
+    ------
+    CLIError
+        A skin file the model refuses, or one that is not a dermis over a hypodermis
+        on a fixed bottom (what the simulated spaces hold).
+
+    Examples
+    --------
+    >>> ns = argparse.Namespace(skin=None, dermis_thickness_mm=1.3)
+    >>> thickness_from_args(ns)
+    {'dermis_thickness_mm': 1.3}
     """
-    return {k: getattr(args, k) for k in THICKNESS_KEYS if getattr(args, k, None) is not None}
+    out = {}
+    if getattr(args, "skin", None):
+        from skinsuction.model import ParameterError, Skin
+
+        try:
+            skin = Skin.read(args.skin)
+            values = skin.two_layer_values()
+        except ParameterError as err:
+            raise CLIError(f"--skin {args.skin}: {err} (the simulated spaces hold the "
+                           "paper's dermis over hypodermis)") from None
+        if skin.bottom != "fixed":
+            raise CLIError(f"--skin {args.skin}: bottom {skin.bottom!r}: the simulated "
+                           "spaces hold a fixed bottom")
+        out = {"dermis_thickness_mm": values["t_d"], "hypodermis_thickness_mm": values["t_h"]}
+    out.update({k: getattr(args, k) for k in THICKNESS_KEYS
+                if getattr(args, k, None) is not None})
+    return out
