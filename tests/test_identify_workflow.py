@@ -18,6 +18,7 @@ import pytest
 import yaml
 
 from skinsuction import paper
+from skinsuction.model import Skin
 from skinsuction.identify import analytic_surrogate_space, surrogate_curve, write_surrogate_space
 from skinsuction.paper import (
     StudySetup,
@@ -42,7 +43,8 @@ FAST = {"n_samples": 300, "n_best": 10, "tolerance": 1e-6, "max_iter": 200}
 def setup():
     spaces = {p: analytic_surrogate_space(p) for p in (2.0, 6.0)}
     p = np.arange(0.0, 101.0, 2.0)
-    fe = {probe: (p, surrogate_curve(*TARGET, probe_mm=probe, pressures_mbar=p).deflection_mm)
+    fe = {probe: (p, surrogate_curve(Skin.two_layer(*TARGET), probe, pressures_mbar=p)
+                  .deflection_mm)
           for probe in (2.0, 6.0)}
     from skinsuction.space import evaluate
 
@@ -59,7 +61,8 @@ def test_make_test_curves_has_both_variants(tmp_path):
     fe = []
     for probe in (2.0, 6.0):
         params = {"probe_mm": probe, "bottom": "fixed", "x1d": 0.0055, "x1h": 0.00041}
-        c = surrogate_curve(**params, pressures_mbar=PAPER_PRESSURE_MBAR)
+        c = surrogate_curve(Skin.two_layer(0.0055, 0.00041), probe,
+                            pressures_mbar=PAPER_PRESSURE_MBAR)
         fe.append(write_curve(c, params, tmp_path / f"{point_id(params)}.parquet"))
     table = make_test_curves(space, fe, tmp_path / "t.csv", target=TARGET)
     assert set(table["source"]) == {"fe", "space"} and set(table["probe_mm"]) == {2.0, 6.0}
@@ -132,9 +135,8 @@ def test_timing_table_has_the_paper_numbers(setup):
 
 def fake_fe(calls):
     def simulate(skin, probe, pressures_mbar, mesh):
-        x1d, x1h, probe_mm = skin.get("dermis.X1"), skin.get("hypodermis.X1"), probe
-        calls.append((x1d, x1h))
-        return surrogate_curve(x1d, x1h, probe_mm=probe_mm, pressures_mbar=pressures_mbar)
+        calls.append((skin.get("dermis.X1"), skin.get("hypodermis.X1")))
+        return surrogate_curve(skin, probe, pressures_mbar=pressures_mbar)
     return simulate
 
 
@@ -173,6 +175,19 @@ STAND_IN = '''"""Stand-in for the FE model (workflow tests only): the analytic s
 from types import SimpleNamespace as Curve  # noqa: F401
 
 from skinsuction.identify import surrogate_curve as simulate  # noqa: F401
+
+
+class Skin:  # the stand-in's: the paper's two layers, their X1 by path
+    def __init__(self, values):
+        self.values = values
+
+    @classmethod
+    def two_layer(cls, x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, bottom="fixed",
+                  prestretch=1.0):
+        return cls({"dermis.X1": x1d, "hypodermis.X1": x1h})
+
+    def get(self, path):
+        return self.values[path]
 '''
 CONFIG = {
     "spaces": {"tiny": {"probes_mm": [2, 6], "x1d": X1D, "x1h": X1H}},
@@ -275,7 +290,7 @@ def test_workflow_tables(workflow_run):
     assert loop["pressures_mbar"] == [float(p) for p in range(0, 101, 10)]
     curves = pd.read_csv(wd / "results/identification/test_curves.csv")
     fe6 = curves[(curves["source"] == "fe") & (curves["probe_mm"] == 6)]
-    expected = surrogate_curve(0.0055, 0.00041, probe_mm=6.0,
+    expected = surrogate_curve(Skin.two_layer(0.0055, 0.00041), 6.0,
                                pressures_mbar=fe6["pressure_mbar"]).deflection_mm
     np.testing.assert_allclose(fe6["deflection_mm"], expected, rtol=1e-12)
 
