@@ -349,6 +349,99 @@ def test_repeated_identification_summary(s6):
     assert rep.relative_error(TRUTH).shape == (5, 2)
 
 
+# ------------------------------------------------------------ the fitting engine
+def test_focus_is_window_focusing_with_the_rng_an_argument(s6):
+    from skinsuction.identify import focus
+
+    obj = single_objective(s6, simulated_curve(s6))
+    a = focus(obj, None, np.random.default_rng(3))
+    b = window_focusing(obj, seed=3)
+    np.testing.assert_array_equal(a.estimate, b.estimate)
+    assert a.E_history.tolist() == b.E_history.tolist()
+    with pytest.raises(TypeError, match="seed"):
+        focus(obj, None, None)
+
+
+def test_repeated_fit_median_is_the_ramp_identification_rule(s2, s6):
+    # identify_data: 100 runs (here 6), their median, the polish from it; the engine's
+    # estimate="median" is the same numbers, bit for bit
+    from skinsuction.identify import polish, repeated_fit
+
+    obj = weighted_objective(s2, simulated_curve(s2), s6, simulated_curve(s6))
+    rep = identify_repeated(obj, repeats=6, seed=4)
+    by_hand = polish(obj, np.median(rep.estimates, axis=0))
+    fit = repeated_fit(obj, repeats=6, seed=4, estimate="median", skip_failed=False)
+    np.testing.assert_array_equal(fit.runs.estimates, rep.estimates)
+    np.testing.assert_array_equal(fit.start, np.median(rep.estimates, axis=0))
+    np.testing.assert_array_equal(fit.x, by_hand)
+    assert fit.cost == obj(by_hand[None, :])[0] and fit.polished == 1
+    with pytest.raises(ValueError, match="starts"):
+        repeated_fit(obj, repeats=1, estimate="median", starts=[TRUTH])
+
+
+def test_repeated_fit_takes_the_best_of_runs_and_starts_and_polishes_it():
+    from skinsuction.identify import Chi2Objective, repeated_fit
+
+    x = np.linspace(0.0, 1.0, 30)
+    y = 0.3 + 0.7 * x
+
+    class Line(Chi2Objective):
+        def blocks(self, t):
+            return [(y - t[:, :1] - t[:, 1:] * x) / 0.01]
+
+    obj = Line([-1.0, -1.0], [1.0, 1.0], x.size)
+    # no runs: the usable start is the only candidate, polished onto the truth; a start
+    # of another size is left out
+    fit = repeated_fit(obj, repeats=0, starts=[[0.2, 0.6], [0.1, 0.2, 0.3]])
+    assert len(fit.candidates) == 1 and fit.polished == 1
+    np.testing.assert_allclose(fit.x, [0.3, 0.7], atol=1e-9)
+    assert fit.cost < 1e-12 and fit.summary()["runs"] == 0
+    unpolished = repeated_fit(obj, repeats=2, seed=1, starts=[[0.3, 0.7]], polish_best=0)
+    np.testing.assert_array_equal(unpolished.x, [0.3, 0.7])  # the start beats the runs
+    assert unpolished.polished == 0 and unpolished.summary()["runs"] == 2
+    with pytest.raises(IdentificationError, match="nothing fits"):
+        repeated_fit(obj, repeats=0, starts=[[0.1]], error_message="nothing fits")
+
+
+def test_chi2_objective_adds_its_blocks_and_prior():
+    from skinsuction.identify import Chi2Objective
+
+    class Two(Chi2Objective):
+        def blocks(self, t):
+            return [t[:, :1] - 1.0, 2.0 * t[:, :2]]
+
+        def prior_residuals(self, t):
+            return t[:, 2:]
+
+    obj = Two(np.zeros(3), np.ones(3), n=3, chunk_values=16)
+    t = np.random.default_rng(0).random((50, 3))
+    r = obj.residuals(t)
+    assert r.shape == (50, 4)
+    np.testing.assert_allclose(obj(t), 0.5 * (r ** 2).sum(axis=1), rtol=1e-14)
+    assert obj.error(obj(t[:1])[0]) == pytest.approx(np.sqrt((r[0] ** 2).sum() / 3))
+    t[3, 0] = np.nan
+    assert obj(t)[3] == np.inf
+
+
+def test_polish_run_reports_a_refused_start():
+    from skinsuction.identify import POLISH, polish_run
+
+    class Flat:
+        lower, upper = np.zeros(2), np.zeros(2)  # a box of no width: the solver refuses
+
+        def residuals(self, t):
+            return np.atleast_2d(t)
+
+        def __call__(self, t):
+            return 0.5 * (np.atleast_2d(t) ** 2).sum(axis=1)
+
+    p = polish_run(Flat(), [0.5, 0.5])
+    assert not p.ran and p.best.tolist() == [0.0, 0.0] and p.cost == p.start_cost
+    with pytest.raises(TypeError, match="unknown polish settings"):
+        polish_run(Flat(), [0.0, 0.0], max_iter=3)
+    assert POLISH["max_nfev"] == 200 and POLISH["tol"] == 1e-12
+
+
 # ----------------------------------------------------------------- baselines
 @pytest.mark.parametrize("fit", [least_squares_from_random_starts, differential_evolution_fit])
 def test_baselines_recover_the_paper_parameters(s6, fit):

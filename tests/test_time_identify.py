@@ -16,11 +16,10 @@ import pytest
 from skinsuction.cli import main
 from skinsuction.errors import InputError
 from skinsuction.evaluation import mode1_suction, mode2_suction, virtual_curve, write_time_csv
-from skinsuction.identify._time_fit import (
+from skinsuction.identify._time_fit import _grid_step, fit_data_of
+from skinsuction.identify._time_intervals import (
     _segments,
     decorrelate_low_rank,
-    _grid_step,
-    fit_data_of,
     rounding_terms,
     sandwich_covariance,
     systematic_basis,

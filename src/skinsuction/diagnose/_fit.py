@@ -1,14 +1,17 @@
-"""Fit a model (neo-Hookean or one cause) on its ray space: window focusing, then polish.
+"""Fit a model (neo-Hookean or one cause) on its ray space with the fitting engine.
 
 The parameters searched are ``theta = (log10 X1d, log10 r[, c])`` with
 ``r = X1h / X1d`` and ``u`` the axis coordinate of the cause (its ray
 coordinate on the cause's scale, :meth:`Cause.to_axis`; see :mod:`._rays`): the window focusing of the paper (section 2.4, N = 1000,
 Nb = 20) samples uniformly in the box of the space, which in logarithms covers
 decades of moduli evenly.  The cost is ``chi^2 / 2`` with the noise level of
-each point, so both probes weigh by their noise.  The best of ``repeats``
-window focusing runs (independent seeds) is then polished by a bounded
-least-squares (trust region), so that the chi^2 that the BIC compares is the
-minimum and not the stochastic stop of the window focusing.
+each point, so both probes weigh by their noise (a
+:class:`skinsuction.identify.Chi2Objective`, one block per probe).  The fit is the
+engine's :func:`skinsuction.identify.repeated_fit`: the best of ``repeats``
+window focusing runs (independent seeds) and of the given starts is polished by a
+bounded least-squares (trust region), so that the chi^2 that the BIC compares is
+the minimum and not the stochastic stop of the window focusing; its intervals are
+the engine's profile likelihood (:func:`skinsuction.identify.profile_intervals`).
 """
 
 from __future__ import annotations
@@ -17,23 +20,20 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.optimize import least_squares
-
-from skinsuction.identify import (
-    IdentificationError,
-    bound_flags,
-    profile_intervals,
-    window_focusing,
-)
+from skinsuction.identify import Chi2Objective, bound_flags, profile_intervals, repeated_fit
 from skinsuction.identify.measured_fit import decorrelate, space_error_direction
 
 from skinsuction.space import RayInterpolant, RaySpace
 
 __all__ = ["FitData", "Fit", "ModelCurves", "fit_model", "fit_bounds", "fit_intervals",
-           "with_space_error", "PAPER_WF"]
+           "with_space_error", "PAPER_WF", "DIAGNOSIS_POLISH"]
 
 #: Window focusing settings of the paper (section 2.4); C in units of sqrt(chi^2/n).
 PAPER_WF = {"n_samples": 1000, "n_best": 20, "tolerance": 1e-6, "max_iter": 200}
+
+#: The polish of the engine (:data:`skinsuction.identify.POLISH`), a residual without a
+#: curve counted as 1e6 noise sd.
+DIAGNOSIS_POLISH = {"nonfinite": 1e6}
 
 
 @dataclass(frozen=True)
@@ -70,6 +70,18 @@ def with_space_error(data: dict, x1d_mpa: float) -> dict:
     measured by ``benchmarks/space_error_profile.py``).  The load of a point is taken
     at ``x1d_mpa`` (the baseline's X1d): every model of the diagnosis then weighs
     the points alike.
+
+    Parameters
+    ----------
+    data : dict
+        ``{probe_mm: FitData}``.
+    x1d_mpa : float
+        The X1d at which the load of each point is read.
+
+    Returns
+    -------
+    dict
+        ``{probe_mm: FitData}`` with ``space_error`` set (None where there is none).
     """
     out = {}
     for p, d in data.items():
@@ -148,6 +160,18 @@ def nested_start(base_theta, cause) -> np.ndarray:
     nuisance, as :class:`ModelCurves` orders them; the cause's model then fits
     at least as well as the neo-Hookean one.
 
+    Parameters
+    ----------
+    base_theta : array_like
+        The neo-Hookean fit's theta (log10 X1d, log10 X1h/X1d, thickness offsets).
+    cause : Cause
+
+    Returns
+    -------
+    ndarray
+
+    Examples
+    --------
     >>> from skinsuction.space import default_registry
     >>> nested_start([-1.4, -2.0, 0.3], default_registry()["pre_tension"])
     array([-1.4, -2. ,  1. ,  0.3])
@@ -160,38 +184,25 @@ def nested_start(base_theta, cause) -> np.ndarray:
 NUISANCE_RANGE = 3.0
 
 
-class _Objective:
-    """chi^2 / 2 for window focusing (vectorised) and residuals for least squares."""
-
-    error_unit = "1"
+class _Objective(Chi2Objective):
+    """chi^2 / 2 of the probes' whitened residuals (one block per probe) and the
+    thickness prior's terms: the engine's objective of a diagnosis fit."""
 
     def __init__(self, model: ModelCurves):
+        super().__init__(model.lower, model.upper, sum(d.n for d in model.data.values()))
         self.model = model
-        self.lower, self.upper = model.lower, model.upper
-        self.n = sum(d.n for d in model.data.values())
 
-    def __call__(self, theta) -> np.ndarray:
-        chi2 = 0.0
+    def blocks(self, theta) -> list:
+        """Each probe's residuals in units of its noise, decorrelated, ``[(N, n_p)]``."""
+        out = []
         for p, m in self.model(theta).items():
             d = self.model.data[p]
-            r = d.whiten((d.deflection_mm[None, :] - m) * (1e3 / d.sigma_um))
-            chi2 = chi2 + np.einsum("nt,nt->n", r, r)
-        chi2 = chi2 + self.model.prior(theta)
-        cost = 0.5 * np.asarray(chi2, dtype=float)
-        cost[~np.isfinite(cost)] = np.inf
-        return cost
+            out.append(d.whiten((d.deflection_mm[None, :] - m) * (1e3 / d.sigma_um)))
+        return out
 
-    def error(self, cost) -> float:
-        return math.sqrt(2.0 * cost / self.n)  # RMS of the normalised residuals
-
-    def residuals(self, theta) -> np.ndarray:
-        out = []
-        for p, m in self.model(np.asarray(theta, dtype=float)[None, :]).items():
-            d = self.model.data[p]
-            out.append(d.whiten((d.deflection_mm - m[None, 0]) * (1e3 / d.sigma_um))[0])
-        out.append(np.asarray(theta, dtype=float)[self.model.n_model:])  # the prior
-        r = np.concatenate(out)
-        return np.where(np.isfinite(r), r, 1e6)
+    def prior_residuals(self, theta) -> np.ndarray:
+        """The thickness offsets in sd units, ``(N, nuisances)``: their prior."""
+        return theta[:, self.model.n_model:]
 
 
 @dataclass
@@ -223,7 +234,21 @@ def _curves_at(model: ModelCurves, theta):
 
 
 def evaluate_fit(model: ModelCurves, theta, name: str, wf=None) -> Fit:
-    """A :class:`Fit` at a given theta (chi^2, E, residuals)."""
+    """A :class:`Fit` at a given theta (chi^2, E, residuals).
+
+    Parameters
+    ----------
+    model : ModelCurves
+    theta : array_like
+    name : str
+        The model's name (the space's).
+    wf : dict, optional
+        What the search did (:meth:`skinsuction.identify.FitResult.summary`).
+
+    Returns
+    -------
+    Fit
+    """
     curves = _curves_at(model, theta)
     chi2, sq, n = 0.0, 0.0, 0
     res, independent = {}, {}
@@ -247,56 +272,44 @@ def evaluate_fit(model: ModelCurves, theta, name: str, wf=None) -> Fit:
 def fit_model(space: RaySpace, data: dict, *, seed=0, repeats: int = 2,
               window_focusing_options: dict | None = None, polish: bool = True,
               starts=()) -> Fit:
-    """Fit the model of ``space`` to ``data`` ({probe: FitData}).
+    """Fit the model of ``space`` to ``data`` by the engine's :func:`repeated_fit`.
 
-    ``repeats`` window focusing runs with seeds spawned from ``seed``; the best
-    one (and any of ``starts``, thetas e.g. of a nested model) is polished by
-    bounded least squares.  Raises :class:`IdentificationError` if no candidate
-    of the space gives a finite cost.
+    Parameters
+    ----------
+    space : RaySpace
+        The model's ray space (neo-Hookean or one cause).
+    data : dict
+        ``{probe_mm: FitData}``.
+    seed : int or numpy.random.SeedSequence
+        ``repeats`` window focusing runs with seeds spawned from it.
+    repeats : int
+        Window focusing runs (0: only the ``starts``).
+    window_focusing_options : dict, optional
+        Overrides :data:`PAPER_WF`.
+    polish : bool
+        Polish the two best candidates by bounded least squares
+        (:data:`DIAGNOSIS_POLISH`).
+    starts : sequence of theta
+        More candidates, e.g. a nested model's fit (:func:`nested_start`).
+
+    Returns
+    -------
+    Fit
+        ``wf``: the runs, their chi^2, the polishes and the settings.
+
+    Raises
+    ------
+    IdentificationError
+        No candidate of the space gives a finite cost.
     """
     model = ModelCurves(space, data)
-    obj = _Objective(model)
     wf = {**PAPER_WF, **(window_focusing_options or {})}
-    root = seed if isinstance(seed, np.random.SeedSequence) else np.random.SeedSequence(seed)
-    runs = []
-    for s in root.spawn(int(repeats)):
-        try:
-            runs.append(window_focusing(obj, seed=s, **wf))
-        except IdentificationError:
-            continue
-    cands = [r.estimate for r in runs]
-    for s in starts:
-        s = np.asarray(s, dtype=float)
-        if s.size == model.d and np.isfinite(obj(s[None, :])[0]):
-            cands.append(s)
-    if not cands:
-        raise IdentificationError(f"{space.name}: no parameters of the space reproduce the "
-                                  "measured pressures (all candidates non-converged)")
-    costs = [float(obj(np.asarray(c)[None, :])[0]) for c in cands]
-    order = np.argsort(costs)
-    best, best_cost = np.asarray(cands[order[0]]), costs[order[0]]
-    n_polished = 0
-    if polish:
-        lo, hi = obj.lower, obj.upper
-        # the best window-focusing result, and the best start if it is a different point
-        for i in order[: 2]:
-            x0 = np.clip(np.asarray(cands[i], dtype=float), lo, hi)
-            try:
-                sol = least_squares(obj.residuals, x0, bounds=(lo, hi), method="trf",
-                                    x_scale=np.maximum(hi - lo, 1e-12) * 0.05,
-                                    diff_step=1e-7, xtol=1e-12, ftol=1e-12, gtol=1e-12,
-                                    max_nfev=200)
-            except ValueError:
-                continue
-            n_polished += 1
-            c = float(obj(sol.x[None, :])[0])
-            if c < best_cost:
-                best, best_cost = sol.x, c
-    info = {"runs": len(runs), "iterations": [int(r.iterations) for r in runs],
-            "converged": [bool(r.converged) for r in runs],
-            "chi2_runs": [2 * float(c) for c in costs[: len(runs)]],
-            "polished": n_polished, "settings": wf, "repeats": int(repeats)}
-    return evaluate_fit(model, best, space.name, info)
+    fit = repeated_fit(_Objective(model), repeats=repeats, seed=seed, starts=starts,
+                       focus_options=wf, polish_best=2 if polish else 0,
+                       polish_options=DIAGNOSIS_POLISH,
+                       error_message=f"{space.name}: no parameters of the space reproduce the "
+                                     "measured pressures (all candidates non-converged)")
+    return evaluate_fit(model, fit.x, space.name, fit.summary())
 
 
 def fit_bounds(space: RaySpace, data: dict, theta) -> dict:
@@ -306,6 +319,21 @@ def fit_bounds(space: RaySpace, data: dict, theta) -> dict:
     configuration key that widens the space there.  A cause's parameter at its
     neutral end (e.g. X2d = 0) is the baseline model, not an edge: its flag has
     ``neutral: True``.
+
+    Parameters
+    ----------
+    space : RaySpace
+        The fitted model's ray space.
+    data : dict
+        ``{probe_mm: FitData}``, as fitted.
+    theta : array_like
+        The fit.
+
+    Returns
+    -------
+    dict
+        ``{parameter: flag}`` (the flags of :func:`skinsuction.identify.bound_flags`
+        with ``value`` and ``neutral``).
     """
     model = ModelCurves(space, data)
     obj = _Objective(model)
@@ -345,18 +373,26 @@ def fit_intervals(space: RaySpace, data: dict, theta, *, noise_dof: float = math
     around ``theta``.  A cause parameter whose interval reaches its neutral end
     (X2d = 0, lambda0 = 1) is consistent with the baseline there: that end is
     not open.
+
+    Parameters
+    ----------
+    space : RaySpace
+        The fitted model's ray space.
+    data : dict
+        ``{probe_mm: FitData}``, as fitted.
+    theta : array_like
+        The fit (:attr:`Fit.theta`).
+    noise_dof : float
+        Degrees of freedom of the noise estimate (inf: known).
+    level : float
+        Confidence level of each interval.
+
+    Returns
+    -------
+    LikelihoodIntervals
     """
     model = ModelCurves(space, data)
     cause = space.cause
-
-    def residuals(t):
-        curves = model(t)
-        parts = [model.data[p].whiten((model.data[p].deflection_mm[None, :] - c)
-                                      * (1e3 / model.data[p].sigma_um))
-                 for p, c in curves.items()]
-        parts.append(np.asarray(t, dtype=float)[:, model.n_model:])  # the thickness prior
-        return np.concatenate(parts, axis=1)
-
     params = {"X1d": lambda t: 10.0 ** t[:, 0], "X1h": lambda t: 10.0 ** (t[:, 0] + t[:, 1])}
     if cause is not None:
         params[cause.symbol] = lambda t: np.asarray(
@@ -364,12 +400,10 @@ def fit_intervals(space: RaySpace, data: dict, theta, *, noise_dof: float = math
     for j, n in enumerate(model.nuisance):
         params[n.symbol] = (lambda t, j=j, n=n:
                             np.asarray(n.thickness(t[:, model.n_model + j]), dtype=float))
-    ci = profile_intervals(residuals, theta, model.lower, model.upper, params, level=level,
-                           noise_dof=noise_dof)
+    ci = profile_intervals(_Objective(model).residuals, theta, model.lower, model.upper,
+                           params, level=level, noise_dof=noise_dof)
     if cause is not None and cause.neutral == cause.lower:
         iv = ci.parameters[cause.symbol]
         if iv.lower_open and iv.lower <= cause.value(cause.neutral, 1.0) + 1e-12:
-            from dataclasses import replace
-
             ci.parameters[cause.symbol] = replace(iv, lower_open=False)
     return ci

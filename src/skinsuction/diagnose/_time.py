@@ -92,8 +92,8 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
     """
     from skinsuction import __version__
     from skinsuction.identify import IdentificationError
-    from skinsuction.identify._time_fit import (fit_time_model, laplace_intervals,
-                                                time_bound_flags)
+    from skinsuction.identify import (fit_time_model, laplace_intervals,
+                                      time_bound_flags)
     from skinsuction.identify.time_curves import prepare_time_fit
     from skinsuction.provenance import collect
 

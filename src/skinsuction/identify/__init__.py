@@ -6,6 +6,13 @@ Lagrange interpolation, through a cost function (single probe, weighted or
 ratio of the 2 mm and 6 mm probes) that the window focusing stochastic
 algorithm minimises.
 
+Every fit of the package (the ramps here, the time curves, each model of
+:mod:`skinsuction.diagnose`) runs on one fitting engine (:mod:`._engine`):
+:func:`focus` (a window focusing run), :func:`polish` (bounded least squares from
+a point), :func:`repeated_fit` (runs from seeds and given starts, the best
+polished: a :class:`FitResult`) and :func:`profile_intervals`, on any
+:class:`Objective` (a :class:`Chi2Objective` for a fit in units of the noise).
+
 Examples
 --------
 >>> from skinsuction.identify import analytic_surrogate_space, single_objective, window_focusing
@@ -18,8 +25,26 @@ Examples
 """
 
 from ._bounds import BOUND_FRACTION, bound_flags
-from ._polish import polish
-from ._intervals import Interval, LikelihoodIntervals, interval_threshold, profile_intervals
+from ._engine import (
+    POLISH,
+    Chi2Objective,
+    FitResult,
+    Objective,
+    Polished,
+    RepeatedIdentification,
+    focus,
+    identify_repeated,
+    polish,
+    polish_run,
+    repeated_fit,
+)
+from ._intervals import (
+    Interval,
+    LikelihoodIntervals,
+    interval_threshold,
+    misfit_scale,
+    profile_intervals,
+)
 from ._objectives import (
     RatioObjective,
     SingleObjective,
@@ -39,23 +64,37 @@ from ._surrogate import (
     surrogate_deflection,
     write_surrogate_space,
 )
+from ._time_fit import TimeFit, TimeFitData, fit_time_model
+from ._time_intervals import laplace_intervals, time_bound_flags
 from ._window_focusing import (
     IdentificationError,
     IterationState,
-    RepeatedIdentification,
     WindowFocusingResult,
-    identify_repeated,
     samples_for,
     window_focusing,
 )
 
 __all__ = [
     "bound_flags",
+    "Objective",
+    "Chi2Objective",
+    "focus",
     "polish",
+    "polish_run",
+    "Polished",
+    "POLISH",
+    "repeated_fit",
+    "FitResult",
     "Interval",
     "LikelihoodIntervals",
     "interval_threshold",
+    "misfit_scale",
     "profile_intervals",
+    "TimeFit",
+    "TimeFitData",
+    "fit_time_model",
+    "laplace_intervals",
+    "time_bound_flags",
     "BOUND_FRACTION",
     "cost",
     "correlation_error",

@@ -33,9 +33,8 @@ from ._time_fit import (
     TIME_WF,
     fit_data_of,
     fit_time_model,
-    laplace_intervals,
-    time_bound_flags,
 )
+from ._time_intervals import laplace_intervals, time_bound_flags
 from ._time_model import G_BOUNDS, TAU_BOUNDS_S
 from ._window_focusing import IdentificationError
 
