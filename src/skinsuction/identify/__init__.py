@@ -13,6 +13,12 @@ a point), :func:`repeated_fit` (runs from seeds and given starts, the best
 polished: a :class:`FitResult`) and :func:`profile_intervals`, on any
 :class:`Objective` (a :class:`Chi2Objective` for a fit in units of the noise).
 
+``skinsuction identify`` returns an :class:`Identification` (a pressure ramp,
+:func:`skinsuction.identify.measured_fit.identify_data`) or a
+:class:`TimeIdentification` (time curves,
+:func:`skinsuction.identify.time_curves.identify_time_data`): named fields, and
+``to_json()`` the content of ``identification.json``.
+
 Examples
 --------
 >>> from skinsuction.identify import analytic_surrogate_space, single_objective, window_focusing
@@ -38,6 +44,7 @@ from ._engine import (
     polish_run,
     repeated_fit,
 )
+from ._identification import Identification, TimeIdentification
 from ._intervals import (
     Interval,
     LikelihoodIntervals,
@@ -75,6 +82,8 @@ from ._window_focusing import (
 )
 
 __all__ = [
+    "Identification",
+    "TimeIdentification",
     "bound_flags",
     "Objective",
     "Chi2Objective",

@@ -1,0 +1,196 @@
+"""The intervals of a pressure ramp's estimate (:func:`.measured_fit.identify_data`).
+
+The noise of the fitted curves (:func:`estimate_noise`), the profile-likelihood
+intervals of X1d and X1h on the likelihood of :mod:`._space_error`
+(:func:`noise_and_intervals`), widened for the sd of given layer thicknesses
+(:func:`thickness_uncertainty`).  Both append their warnings to the setup's.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._intervals import profile_intervals
+from ._polish import polish
+from ._objectives import single_objective
+from ._ramp_steps import RampSetup, make_objective
+from ._space_error import MODEL_ERROR_RELATIVE, likelihood_residuals
+
+__all__ = ["estimate_noise", "noise_and_intervals", "thickness_uncertainty"]
+
+
+def estimate_noise(curves, data, noise_um):
+    """Noise of the fitted curves: given, from replicates of their probes, or differences."""
+    from skinsuction.noise import NoiseEstimate, noise_from_differences, noise_from_replicates
+
+    if noise_um is not None:
+        return NoiseEstimate(float(noise_um), "given", math.inf, {})
+    groups = []
+    for p in curves:
+        reps = data.for_probe(p)
+        ps = [c.pressure_mbar for c in reps]
+        if len(reps) > 1 and all(q.shape == ps[0].shape and np.allclose(q, ps[0]) for q in ps):
+            groups.append(np.array([c.deflection_mm for c in reps]))
+    if groups:
+        return noise_from_replicates(groups)
+    return noise_from_differences([(c.pressure_mbar[c.pressure_mbar > 0],
+                                    c.deflection_mm[c.pressure_mbar > 0])
+                                   for c in curves.values()])
+
+
+def noise_and_intervals(setup: RampSetup, theta, noise_um, level: float, correlated: bool):
+    """The noise of the curves and the profile-likelihood intervals of X1d and X1h.
+
+    Parameters
+    ----------
+    setup : RampSetup
+    theta : array_like
+        The estimate (the objective's coordinates).
+    noise_um : float or None
+        The noise sd given (µm), else estimated (:func:`estimate_noise`).
+    level : float
+        Confidence level.
+    correlated : bool
+        Whether the space's error enters each probe as a correlated term (on the
+        scale-free space; :data:`.measured_fit.SPACE_ERROR_CORRELATED`).
+
+    Returns
+    -------
+    noise : dict or None
+        The noise estimate (None, with a warning, if it cannot be estimated).
+    intervals : dict or None
+        The intervals (None, with a warning, without a noise or a likelihood).
+    """
+    obj, objective, curves, warnings = setup.obj, setup.objective, setup.curves, setup.warnings
+    scale_free = setup.scale_free
+    try:
+        noise = estimate_noise(curves, setup.data, noise_um)
+    except ValueError as err:
+        warnings.append(f"no intervals: the noise cannot be estimated ({err}); "
+                        "give it with --noise-um")
+        return None, None
+    if noise.sd_um <= 1e-6:
+        warnings.append("no intervals: the estimated noise is 0 (are the deflections "
+                        "rounded or synthetic?); give it with --noise-um")
+        return noise.to_dict(), None
+    x1d = float(obj.to_moduli(np.asarray(theta, dtype=float).reshape(1, -1))[0, 0])
+    resid = likelihood_residuals(obj, objective, curves, 1e-3 * noise.sd_um,
+                                 MODEL_ERROR_RELATIVE if scale_free else 0.0,
+                                 x1d if scale_free and correlated else None)
+    params = {"X1d": lambda t: obj.to_moduli(t)[:, 0], "X1h": lambda t: obj.to_moduli(t)[:, 1]}
+    try:
+        ci = profile_intervals(resid, theta, obj.lower, obj.upper, params, level=level,
+                               noise_dof=noise.dof, fit_is_minimum=objective == "single")
+    except ValueError as err:
+        warnings.append(f"no intervals: {err}")
+        return noise.to_dict(), None
+    for name, iv in ci.parameters.items():
+        sides = [s for s, o in (("below", iv.lower_open), ("above", iv.upper_open)) if o]
+        if sides:
+            warnings.append(f"{name} is not bounded {' or '.join(sides)} by the data within the "
+                            f"simulated space: its {100 * level:g} % interval "
+                            f"{iv.text('MPa')} reaches the edge of the space")
+    if ci.scale > 1.5:
+        warnings.append(f"the residuals are {math.sqrt(ci.scale):.2g} times the noise: the "
+                        "intervals are widened for the misfit (see skinsuction diagnose)")
+    warnings.extend(ci.notes)
+    return noise.to_dict(), ci.to_dict()
+
+
+def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=None):
+    """Widen the intervals for the sd of the given thicknesses (Laplace approximation).
+
+    For each thickness ``t`` given with an sd, the fit is polished again, from the
+    estimate, on the rays of ``t - sd`` and ``t + sd``.  With ``c(t)``, the chi2 of
+    the fit at ``t`` (the noise sd of the intervals), the thickness is a nuisance
+    parameter with the Gaussian prior ``(t - t0) / sd``: its posterior sd is
+    ``1 / sqrt(1 / sd^2 + c''(t0) / 2)`` (the curves may pin it down better than
+    the prior), and the moduli move by ``d log X / dt`` (central difference) times
+    it.  The interval half-widths (in log) are combined with ``z`` times these
+    moves in quadrature (``z`` the normal quantile of the level).
+
+    Parameters
+    ----------
+    setup : RampSetup
+    theta : array_like
+        The estimate (the objective's coordinates).
+    est : array_like
+        The estimate (MPa).
+    intervals : dict or None
+        The intervals of :func:`noise_and_intervals`, widened in place.
+    level : float
+        Their confidence level.
+    noise : dict, optional
+        The noise of :func:`noise_and_intervals` (its ``sd_um``).
+
+    Returns
+    -------
+    dict or None
+        Per thickness: the sensitivities, the posterior sd and the thickness the
+        curves prefer within the prior (reported, not used); None without a sd.
+    """
+    from scipy import stats
+
+    space, geometry, probes, curves = setup.space, setup.geometry, setup.probes, setup.curves
+    sds = {k: v for k, v in (geometry.sd or {}).items() if v and v > 0}
+    if not sds or space.rays is None:
+        return None
+    sigma_mm = 1e-3 * float((noise or {}).get("sd_um") or 0.0)
+
+    def fit_at(g):
+        moved = space.at(g)
+        spaces = {p: moved.probe(p) for p in probes}
+        obj = make_objective(setup.objective, spaces, curves, probes, setup.alpha,
+                             setup.data.path)
+        th = polish(obj, np.asarray(theta, dtype=float))
+        ss = 0.0
+        for p, c in curves.items():
+            m = single_objective(spaces[p], c).curves(th.reshape(1, 2))[0]
+            ss += float(np.nansum((c.deflection_mm - m) ** 2))
+        for n in moved.notes(probes):
+            if n not in space.notes(probes) and n not in notes_seen:
+                notes_seen.append(n)
+        return obj.to_moduli(th)[0], ss
+
+    notes_seen = []
+    _, ss0 = fit_at(geometry)
+    out = {}
+    for key, sd in sds.items():
+        lo, ss_lo = fit_at(geometry.shifted(key, -sd))
+        hi, ss_hi = fit_at(geometry.shifted(key, sd))
+        d = (np.log(hi) - np.log(lo)) / 2  # d log X per sd
+        if sigma_mm > 0:
+            c_lo, c0, c_hi = (x / sigma_mm ** 2 for x in (ss_lo, ss0, ss_hi))
+            k = max((c_hi - 2 * c0 + c_lo) / sd ** 2, 0.0)
+            g = (c_hi - c_lo) / (2 * sd)
+            post_sd = 1.0 / math.sqrt(1.0 / sd ** 2 + k / 2)
+            preferred = getattr(geometry, key) - g / (k + 2 / sd ** 2)
+        else:
+            post_sd, preferred = sd, None
+        name = {"t_d": "dermis_thickness", "t_h": "hypodermis_thickness"}[key]
+        out[name] = {
+            "sd_mm": sd, "posterior_sd_mm": post_sd,
+            "preferred_by_the_curves_mm": preferred,
+            "d_log_X1d_per_sd": float(d[0]), "d_log_X1h_per_sd": float(d[1]),
+            "X1d_change_percent_per_sd": float(100 * np.expm1(d[0])),
+            "X1h_change_percent_per_sd": float(100 * np.expm1(d[1])),
+            "log_shift": [float(abs(d[0]) * post_sd / sd), float(abs(d[1]) * post_sd / sd)]}
+    setup.warnings.extend(f"geometry (thickness +- 1 sd): {n}" for n in notes_seen)
+    if intervals is not None:
+        z = float(stats.norm.ppf(0.5 + level / 2))
+        for i, name in enumerate(("X1d", "X1h")):
+            iv = intervals.get(name)
+            if not iv:
+                continue
+            g = math.sqrt(sum(v["log_shift"][i] ** 2 for v in out.values()))
+            e = float(est[i])
+            for side, sign in (("lower", -1), ("upper", 1)):
+                h = abs(math.log(iv[side] / e)) if iv[side] and iv[side] > 0 else 0.0
+                iv[side] = e * math.exp(sign * math.hypot(h, z * g))
+            iv["includes_thickness_sd"] = True
+        intervals["notes"] = list(intervals.get("notes", [])) + [
+            "the intervals include the sd of the given thicknesses (Laplace approximation: "
+            "the fit at each thickness +- 1 sd, a Gaussian prior on the thickness)"]
+    return out
