@@ -150,34 +150,70 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _print_ramp(result: dict) -> None:
-    """The estimate, its spread and intervals of a pressure ramp's identification."""
-    est, spread, e = result["estimate"], result["spread"], result["E"]
+def _print_ramp(result) -> None:
+    """The estimate, its spread and intervals of a pressure ramp's identification.
+
+    Parameters
+    ----------
+    result : Identification
+        Of :func:`skinsuction.identify.measured_fit.identify_measured`.
+
+    Returns
+    -------
+    None
+    """
+    est, spread, e = result.estimate, result.spread, result.E
     unit = "" if e["unit"] == "1" else f" {e['unit']}"
     e_txt = "n/a" if e["at_estimate"] is None or not math.isfinite(e["at_estimate"]) \
         else f"{e['at_estimate']:.3g}{unit}"
     print(f"X1d = {est['x1d_mpa']:.4g} MPa, X1h = {est['x1h_mpa']:.4g} MPa (median of "
-          f"{result['settings']['repeats']} repeats; interquartile range / median "
+          f"{result.settings['repeats']} repeats; interquartile range / median "
           f"{100 * spread['x1d_relative_iqr']:.2g} % and {100 * spread['x1h_relative_iqr']:.2g} %), "
-          f"E = {e_txt}, median {result['iterations']['median']:g} iterations")
-    if result["intervals"]:
-        iv = result["intervals"]
+          f"E = {e_txt}, median {result.iterations['median']:g} iterations")
+    if result.intervals:
+        iv = result.intervals
         print(f"{100 * iv['level']:g} % intervals (profile likelihood, noise "
-              f"{result['noise']['sd_um']:.2g} µm, {result['noise']['method']}): "
+              f"{result.noise['sd_um']:.2g} µm, {result.noise['method']}): "
               f"X1d {interval_text(iv['X1d'])} MPa, X1h {interval_text(iv['X1h'])} MPa")
 
 
-def _print_tail(result: dict, paths: dict) -> None:
-    """Warnings (standard error), the space used and the files written."""
-    for w in result["warnings"]:
+def _print_tail(result, paths: dict) -> None:
+    """Warnings (standard error), the space used and the files written.
+
+    Parameters
+    ----------
+    result : Identification or TimeIdentification
+        The result written.
+    paths : dict
+        The files of :func:`skinsuction.identify.measured_fit.write_identification`.
+
+    Returns
+    -------
+    None
+    """
+    for w in result.warnings:
         print(f"warning: {w}", file=sys.stderr)
-    print(f"space: {result['space'].get('description') or result['space'].get('path')}")
+    print(f"space: {result.space.get('description') or result.space.get('path')}")
     print(f"wrote {paths['json']}, {paths['png']}, {paths['pdf']}")
 
 
 def _run_time(args: argparse.Namespace, data) -> int:
-    """``identify`` of time curves: X1d, X1h (long-time) and a Prony spectrum."""
-    from skinsuction.identify.time_curves import identify_time_file, write_time_identification
+    """``identify`` of time curves: X1d, X1h (long-time) and a Prony spectrum.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed arguments of :func:`add_arguments`.
+    data : MeasuredTimeData
+        The file's time curves, as read.
+
+    Returns
+    -------
+    int
+        0.
+    """
+    from skinsuction.identify.measured_fit import write_identification
+    from skinsuction.identify.time_curves import identify_time_file
 
     if args.objective is not None:
         print("note: --objective is for pressure ramps; the time curves are fitted jointly",
@@ -190,34 +226,44 @@ def _run_time(args: argparse.Namespace, data) -> int:
         phases=args.phases, thickness=thickness_from_args(args),
         solve_on_demand=not args.no_solve, workers=args.workers)
     with writing(args.out):
-        paths = write_time_identification(result, args.out)
+        paths = write_identification(result, args.out)
     _print_time(result)
     _print_tail(result, paths)
     return EXIT_OK
 
 
-def _print_time(result: dict) -> None:
-    """The moduli, the spectrum, the fit per curve and the R parameters of time curves."""
-    iv = result["intervals"]
+def _print_time(result) -> None:
+    """The moduli, the spectrum, the fit per curve and the R parameters of time curves.
+
+    Parameters
+    ----------
+    result : TimeIdentification
+        Of :func:`skinsuction.identify.time_curves.identify_time_file`.
+
+    Returns
+    -------
+    None
+    """
+    iv = result.intervals
     spectrum = ", ".join(f"g_{k} = {g:.3g} {interval_text(iv[f'g_{k}'])}, tau_{k} = {t:.3g} s "
                          f"{interval_text(iv[f'tau_{k}'])}"
-                         for k, (g, t) in enumerate(zip(result["g"], result["tau_s"]), 1))
-    print(f"X1d = {result['X1d']:.4g} MPa {interval_text(iv['X1d'])}, X1h = "
-          f"{result['X1h']:.4g} MPa {interval_text(iv['X1h'])} (long-time; "
+                         for k, (g, t) in enumerate(zip(result.g, result.tau_s), 1))
+    print(f"X1d = {result.X1d:.4g} MPa {interval_text(iv['X1d'])}, X1h = "
+          f"{result.X1h:.4g} MPa {interval_text(iv['X1h'])} (long-time; "
           f"{100 * iv['level']:g} % intervals, {iv['method'].split(' in ')[0]})")
-    print(f"spectrum: {spectrum}; instantaneous X1d = {result['X1d_instantaneous']:.4g} MPa, "
-          f"X1h = {result['X1h_instantaneous']:.4g} MPa")
-    for c in result["fit_quality"]["curves"]:
+    print(f"spectrum: {spectrum}; instantaneous X1d = {result.X1d_instantaneous:.4g} MPa, "
+          f"X1h = {result.X1h_instantaneous:.4g} MPa")
+    for c in result.fit_quality["curves"]:
         parts = ", ".join(f"{ph} {v['rms_um']:.2g} µm" for ph, v in c["phases"].items()
                           if v["rms_um"] is not None)
         print(f"{c['curve']} ({c['protocol']}): reduced chi2 {c['chi2'] / max(c['points'], 1):.3g}"
               f"; RMS residual per phase: {parts}")
-    rows = result["r_parameters"]["mode1"]
+    rows = result.r_parameters["mode1"]
     if rows:
         r = rows[0]
         print(f"R parameters, first cycle: Ue {r['Ue']:.2f}, Uf {r['Uf']:.2f} mm, R2 "
               f"{r['R2']:.2f}, R5 {r['R5']:.2f}, R6 {r['R6']:.2f}, R7 {r['R7']:.2f} "
               f"({len(rows)} rows in identification.json)")
-    for r in result["r_parameters"]["mode2"][:1]:
+    for r in result.r_parameters["mode2"][:1]:
         print(f"ramp parameters: Umax {r['Umax']:.2f} mm, Ures {r['Ures']:.2f} mm, "
               f"hysteresis {100 * r['hysteresis_fraction']:.2g} %")

@@ -345,7 +345,3 @@ def write_identification(result: Identification | TimeIdentification, out_dir) -
     _style.save(fig, paths["png"], paths["pdf"])
     plt.close(fig)
     return paths
-
-
-#: the strict JSON of :func:`write_identification` under its first name
-_strict_json = strict_json

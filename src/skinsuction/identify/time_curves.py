@@ -5,8 +5,9 @@ What ``skinsuction identify TIME_CURVES.csv`` runs: read the curves
 layers, fit the long-time moduli and one or two Prony terms with the fast path
 (:func:`skinsuction.identify._time_fit.fit_time_model`), put Laplace intervals on
 every parameter, flag edges, and report the R parameters beside them
-(:func:`identify_time_data`); write ``identification.json`` and a fit figure
-(:func:`write_time_identification`).
+(:func:`identify_time_data`: a :class:`~skinsuction.identify.TimeIdentification`);
+write ``identification.json`` and a fit figure (:func:`write_time_identification`,
+the one writer of :func:`skinsuction.identify.measured_fit.write_identification`).
 
 Examples
 --------
@@ -14,20 +15,20 @@ Examples
 >>> from skinsuction.space import load_space
 >>> r = identify_time_data(load_time_curves("data/example_mode1.csv"), load_space(),
 ...                        terms=1, repeats=1)        # doctest: +SKIP
->>> r["X1d"], r["g"], r["tau_s"]                      # doctest: +SKIP
+>>> r.X1d, r.g, r.tau_s                                # doctest: +SKIP
 """
 
 from __future__ import annotations
 
 import datetime as _dt
 import math
-from pathlib import Path
 
 import numpy as np
 
 from skinsuction._files import file_sha256
 from skinsuction.errors import InputError
 
+from ._identification import TimeIdentification
 from ._time_fit import (
     MODEL_ERROR,
     TIME_WF,
@@ -57,10 +58,30 @@ def _check(terms, repeats, seed, noise_um, level, phases):
 
 
 def identify_time_file(path, space_path=None, *, thickness=None, solve_on_demand=True,
-                       workers=1, **options) -> dict:
-    """:func:`identify_time_data` of a file (the space read from ``space_path``, the
-    default one if None); ``input.sha256`` filled in.  ``path`` may be the file's
-    curves as read (:func:`skinsuction.measured.read_measurement`): not read again."""
+                       workers=1, **options) -> TimeIdentification:
+    """:func:`identify_time_data` of a file, the space read from ``space_path``.
+
+    Parameters
+    ----------
+    path : path-like or MeasuredTimeData
+        The time-curve CSV, or its curves as read
+        (:func:`skinsuction.measured.read_measurement`): not read again.
+    space_path : path-like, optional
+        The scale-free space (default: :func:`skinsuction.space.load_space`'s).
+    thickness : dict, optional
+        Layer thicknesses overriding the file's header.
+    solve_on_demand : bool
+        Solve the rays of a probe or layers the space lacks.
+    workers : int
+        Processes for those solves.
+    **options
+        The settings of :func:`identify_time_data` (``terms``, ``probes`` ...).
+
+    Returns
+    -------
+    TimeIdentification
+        With ``input["sha256"]`` the file's SHA-256.
+    """
     from skinsuction.measured import MeasuredTimeData, load_time_curves
     from skinsuction.space import load_space
 
@@ -70,7 +91,7 @@ def identify_time_file(path, space_path=None, *, thickness=None, solve_on_demand
         raise InputError(f"{space.info['path']}: time curves need the scale-free space (its "
                          "neo-Hookean rays), not a grid database")
     result = identify_time_data(data, space, thickness=thickness, **options)
-    result["input"]["sha256"] = file_sha256(data.path)
+    result.input["sha256"] = file_sha256(data.path)
     return result
 
 
@@ -160,15 +181,24 @@ def prepare_time_fit(data, space, *, probes=None, curve=None, noise_um=None, pha
 def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
                        repeats: int = 2, seed: int = 0, noise_um: float | None = None,
                        level: float = 0.95, phases: str = "all", thickness=None,
-                       ue_time_s: float = 0.1, window_focusing: dict | None = None) -> dict:
+                       ue_time_s: float = 0.1,
+                       window_focusing: dict | None = None) -> TimeIdentification:
     """Identify X1d, X1h (long-time) and ``terms`` Prony terms of loaded time curves.
+
+    The steps: read and check (:func:`prepare_time_fit`), fit
+    (:func:`~skinsuction.identify.fit_time_model`), intervals
+    (:func:`~skinsuction.identify.laplace_intervals`), bounds and notes
+    (:func:`_flag_bounds`, :func:`_interval_notes`), the fit per curve and phase
+    (:func:`_fit_quality`), the result (:func:`_time_identification`).
 
     Parameters
     ----------
     data : MeasuredTimeData
+        The time curves (:func:`skinsuction.measured.load_time_curves`).
     space : LoadedSpace
         A scale-free space (:func:`skinsuction.space.load_space`).
     terms : {1, 2}
+        Prony terms of the relaxation spectrum.
     probes : list of float, optional
         The probes fitted (default: every curve of the file, jointly: one skin).
     curve : str, optional
@@ -178,38 +208,54 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
     noise_um : float, optional
         Noise sd of one deflection (default: the loader's, not below q/sqrt(12)).
     level : float
+        Confidence level of the intervals.
     phases : {"all", "on"}
         Fit every point with the model-error sd per phase, or only those while the
         suction is on.
     thickness : dict, optional
         Layer thicknesses overriding the file's header (:func:`geometry_of`).
+    ue_time_s : float
+        When Ue of the R parameters is read after the suction starts (s).
+    window_focusing : dict, optional
+        Overrides of :data:`TIME_WF` (``n_samples``, ``n_best``, ``tolerance``, ``max_iter``).
 
     Returns
     -------
-    dict
-        JSON-able: ``X1d``, ``X1h`` (MPa, long-time), ``g``, ``tau_s`` (lists),
+    TimeIdentification
+        ``X1d``, ``X1h`` (MPa, long-time), ``g``, ``tau_s`` (lists),
         ``X1d_instantaneous``, ``X1h_instantaneous``, ``intervals``, ``at_bound``,
         ``r_parameters``, ``fit_quality`` (chi^2 per curve and phase), ``fit``
         (curves), ``noise``, ``likelihood``, ``space``, ``geometry``, ``settings``,
-        ``input``, ``provenance``, ``warnings``.
+        ``input`` (``sha256`` None), ``provenance``, ``warnings``; ``to_json()`` is
+        ``identification.json``.
     """
-    from skinsuction import __version__
-    from skinsuction.provenance import collect
-
     _check(terms, repeats, seed, noise_um, level, phases)
     prep = prepare_time_fit(data, space, probes=probes, curve=curve, noise_um=noise_um,
                             phases=phases, thickness=thickness)
-    curves, rays, fit_data, warnings = prep["curves"], prep["rays"], prep["data"], \
-        prep["warnings"]
-    geometry, space = prep["geometry"], prep["space"]
+    rays, fit_data, warnings = prep["rays"], prep["data"], prep["warnings"]
     wf = {**TIME_WF, **(window_focusing or {})}
     try:
         fit = fit_time_model(rays, fit_data, terms=terms, seed=seed, repeats=repeats,
                              window_focusing_options=wf)
     except IdentificationError as err:
         raise InputError(f"{data.path}: beyond the simulated space: {err}") from None
-    params = fit.parameters
     intervals = laplace_intervals(rays, fit_data, fit, level=level)
+    flags = _flag_bounds(rays, fit_data, fit, intervals, warnings)
+    _interval_notes(fit_data, fit, intervals, flags, warnings)
+    settings = {"terms": int(terms), "repeats": int(repeats), "seed": int(seed),
+                "phases": phases, "level": float(level), "window_focusing": wf,
+                "g_bounds": list(G_BOUNDS), "tau_bounds_s": list(TAU_BOUNDS_S),
+                "probes_mm": [c.probe_mm for c in prep["curves"]], "curve": curve,
+                "ue_time_s": float(ue_time_s)}
+    noise = {"sd_um": [1e3 * d.noise_sd_mm for d in fit_data],
+             "method": "given" if noise_um is not None else
+             "the loader's (third differences in time, not below q/sqrt(12))",
+             "resolution_mm": [c.resolution_mm for c in prep["curves"]]}
+    return _time_identification(data, prep, fit, intervals, flags, settings, noise)
+
+
+def _flag_bounds(rays, fit_data, fit, intervals, warnings) -> dict:
+    """The ``at_bound`` flags of every parameter, a warning for each at an edge."""
     x1d_lo_key = "scale_free_space.load.max (the largest suction over load.max sets the " \
                  "lowest X1d)"
     flags = time_bound_flags(rays, fit_data, fit, [
@@ -231,13 +277,18 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
                             f"sits at the {f['side']} end of the spectrum's bounds (g "
                             f"{G_BOUNDS[0]:g}-{G_BOUNDS[1]:g}, tau {TAU_BOUNDS_S[0]:g}-"
                             f"{TAU_BOUNDS_S[1]:g} s): the data may want a value beyond it")
+    return flags
+
+
+def _interval_notes(fit_data, fit, intervals, flags, warnings) -> None:
+    """Warn of open intervals, unresolved time constants, a misfit; then the intervals' notes."""
     for name, iv in intervals.items():
         if isinstance(iv, dict) and (iv.get("lower_open") or iv.get("upper_open")) \
                 and not flags.get(name.replace("_instantaneous", ""), {}).get("at_bound"):
             warnings.append(f"{name}: the data do not bound it within the space and the "
                             f"spectrum's bounds ({iv['lower']:.3g}-{iv['upper']:.3g}, open)")
     dt = min(float(np.median(np.diff(d.time_s))) for d in fit_data)
-    for k, tau in enumerate(params["tau_s"], start=1):
+    for k, tau in enumerate(fit.parameters["tau_s"], start=1):
         if tau < 2 * dt:
             warnings.append(f"tau_{k} = {1e3 * tau:.3g} ms is shorter than two samples "
                             f"({1e3 * dt:.3g} ms apart): it is seen only through the jump "
@@ -248,6 +299,17 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
                         "number of Prony terms) misses the curve; the intervals are widened")
     warnings += intervals["notes"]
 
+
+def _fit_quality(curves, fit_data, fit):
+    """The chi^2 and residuals of each curve per phase, and the curves measured and fitted.
+
+    Returns
+    -------
+    quality : list of dict
+        Per curve: points, chi^2, and per phase chi^2, RMS and largest residual.
+    fitted : dict
+        Per curve: time, pressure, measured and fitted deflections, residuals, phases.
+    """
     quality, fitted = [], {}
     for c, d, m, res, pc in zip(curves, fit_data, fit.fitted_mm, fit.residual_um,
                                 fit.phase_chi2):
@@ -269,73 +331,78 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
                            "fitted_mm": [float(v) if np.isfinite(v) else None for v in m],
                            "residual_um": [float(v) if np.isfinite(v) else None for v in res],
                            "phase": [str(v) for v in d.phase]}
+    return quality, fitted
+
+
+def _time_identification(data, prep, fit, intervals, flags, settings,
+                         noise) -> TimeIdentification:
+    """The result of the steps, in the order of ``identification.json``."""
+    from skinsuction import __version__
+    from skinsuction.provenance import collect
+
+    curves, rays, fit_data, geometry, space = (prep["curves"], prep["rays"], prep["data"],
+                                               prep["geometry"], prep["space"])
+    params, terms, phases = fit.parameters, settings["terms"], settings["phases"]
+    quality, fitted = _fit_quality(curves, fit_data, fit)
     spec = next(iter(rays.values())).spec
-    settings = {"terms": int(terms), "repeats": int(repeats), "seed": int(seed),
-                "phases": phases, "level": float(level), "window_focusing": wf,
-                "g_bounds": list(G_BOUNDS), "tau_bounds_s": list(TAU_BOUNDS_S),
-                "probes_mm": [c.probe_mm for c in curves], "curve": curve,
-                "ue_time_s": float(ue_time_s)}
-    return {
-        "kind": "time curves",
-        "skinsuction_version": __version__,
-        "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "model": {"name": "two-layer neo-Hookean, one Prony spectrum for both layers, fast "
-                          "path M_el(p_eff) on the scale-free space",
-                  "convention": "X1d, X1h long-time (equilibrium) moduli; instantaneous "
-                                "X1 (1 + sum g)", "terms": int(terms)},
-        "X1d": params["X1d"], "X1h": params["X1h"], "g": params["g"], "tau_s": params["tau_s"],
-        "X1d_instantaneous": params["X1d_instantaneous"],
-        "X1h_instantaneous": params["X1h_instantaneous"],
-        "intervals": intervals,
-        "at_bound": flags,
-        "r_parameters": _rparams_records(curves, ue_time_s),
-        "fit_quality": {"chi2": float(fit.chi2), "points": int(fit.n_points),
-                        "parameters": int(fit.n_params),
-                        "reduced_chi2": float(fit.chi2 / max(fit.n_points - fit.n_params, 1)),
-                        "curves": quality},
-        "noise": {"sd_um": [1e3 * d.noise_sd_mm for d in fit_data],
-                  "method": "given" if noise_um is not None else
-                  "the loader's (third differences in time, not below q/sqrt(12))",
-                  "resolution_mm": [c.resolution_mm for c in curves]},
-        "likelihood": {"sd": "sqrt(noise^2 + (model_error[phase] * U)^2), U the curve's "
-                             "largest deflection",
-                       "model_error_fraction": dict(MODEL_ERROR), "phases_fitted": phases,
-                       "pressure": [n for d in fit_data for n in d.notes]},
-        "space": {**space.info, "bottom": space.bottom, "kind": "scale_free",
-                  "x1d_range_mpa": list(spec.x1d_range), "load_max": spec.load_max,
-                  "reach_mbar": spec.reach_mbar(),
-                  "bounds_x1h_over_x1d": [float(spec.ratio_nodes[0]),
-                                          float(spec.ratio_nodes[-1])]},
-        "geometry": {**geometry.to_dict(), "notes": space.notes(sorted(rays))},
-        "settings": settings,
-        "input": {"path": str(data.path), "sha256": None, "metadata": dict(data.metadata),
-                  "curves": {c.label: {"first_line": c.first_line, "samples": len(c),
-                                       "protocol": c.protocol} for c in curves}},
-        "runs": fit.wf,
-        "fit": fitted,
-        "provenance": collect(config=settings),
-        "warnings": warnings,
-    }
+    return TimeIdentification(
+        skinsuction_version=__version__,
+        created_utc=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        model={"name": "two-layer neo-Hookean, one Prony spectrum for both layers, fast "
+                       "path M_el(p_eff) on the scale-free space",
+               "convention": "X1d, X1h long-time (equilibrium) moduli; instantaneous "
+                             "X1 (1 + sum g)", "terms": int(terms)},
+        X1d=params["X1d"], X1h=params["X1h"], g=params["g"], tau_s=params["tau_s"],
+        X1d_instantaneous=params["X1d_instantaneous"],
+        X1h_instantaneous=params["X1h_instantaneous"],
+        intervals=intervals,
+        at_bound=flags,
+        r_parameters=_rparams_records(curves, settings["ue_time_s"]),
+        fit_quality={"chi2": float(fit.chi2), "points": int(fit.n_points),
+                     "parameters": int(fit.n_params),
+                     "reduced_chi2": float(fit.chi2 / max(fit.n_points - fit.n_params, 1)),
+                     "curves": quality},
+        noise=noise,
+        likelihood={"sd": "sqrt(noise^2 + (model_error[phase] * U)^2), U the curve's "
+                          "largest deflection",
+                    "model_error_fraction": dict(MODEL_ERROR), "phases_fitted": phases,
+                    "pressure": [n for d in fit_data for n in d.notes]},
+        space={**space.info, "bottom": space.bottom, "kind": "scale_free",
+               "x1d_range_mpa": list(spec.x1d_range), "load_max": spec.load_max,
+               "reach_mbar": spec.reach_mbar(),
+               "bounds_x1h_over_x1d": [float(spec.ratio_nodes[0]),
+                                       float(spec.ratio_nodes[-1])]},
+        geometry={**geometry.to_dict(), "notes": space.notes(sorted(rays))},
+        settings=settings,
+        input={"path": str(data.path), "sha256": None, "metadata": dict(data.metadata),
+               "curves": {c.label: {"first_line": c.first_line, "samples": len(c),
+                                    "protocol": c.protocol} for c in curves}},
+        runs=fit.wf,
+        fit=fitted,
+        provenance=collect(config=settings),
+        warnings=prep["warnings"],
+    )
 
 
-def write_time_identification(result: dict, out_dir) -> dict:
-    """Write ``identification.json`` and ``fit.png`` / ``fit.pdf`` (atomically)."""
-    import json
+def write_time_identification(result: TimeIdentification, out_dir) -> dict:
+    """Write ``identification.json`` and ``fit.png`` / ``fit.pdf`` (atomically).
 
-    import matplotlib.pyplot as plt
+    The one writer of both kinds of result,
+    :func:`skinsuction.identify.measured_fit.write_identification`, under the name
+    the time curves' callers know.
 
-    from skinsuction._files import atomic_output
-    from skinsuction.figures import _style
-    from skinsuction.figures.time_fit import plot_time_fit
+    Parameters
+    ----------
+    result : TimeIdentification
+        Of :func:`identify_time_data`.
+    out_dir : path-like
+        The folder (created if missing).
 
-    from .measured_fit import _strict_json
+    Returns
+    -------
+    dict
+        ``{"json": path, "png": path, "pdf": path}``.
+    """
+    from .measured_fit import write_identification
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {"json": out / "identification.json", "png": out / "fit.png", "pdf": out / "fit.pdf"}
-    with atomic_output(paths["json"]) as tmp:
-        tmp.write_text(json.dumps(_strict_json(result), indent=2) + "\n", encoding="utf-8")
-    fig = plot_time_fit(result)
-    _style.save(fig, paths["png"], paths["pdf"])
-    plt.close(fig)
-    return paths
+    return write_identification(result, out_dir)
