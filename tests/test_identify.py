@@ -469,3 +469,34 @@ def test_compare_spaces_runs_every_objective_with_and_without_polish():
         wf = abs(by.loc[(kind, "window focusing"), "x1d_error_median_pct"])
         pol = abs(by.loc[(kind, "window focusing + polish"), "x1d_error_median_pct"])
         assert pol <= wf + 1e-6 and pol < 0.01
+
+
+def test_identify_data_returns_an_identification_whose_json_is_the_file(s2, s6, tmp_path):
+    # the typed result: named fields; to_json() is identification.json key for key, in
+    # order; result["key"] (the mapping view) reads it; the one writer writes it
+    import json
+
+    from skinsuction.identify import Identification
+    from skinsuction.identify.measured_fit import identify_data, write_identification
+    from skinsuction.measured import MeasuredCurve, MeasuredData
+    from skinsuction.space import LoadedSpace
+
+    rng = np.random.default_rng(3)
+    curves = tuple(MeasuredCurve(p, s.pressure_mbar, evaluate(s, [[0.03, 5e-4]])[0]
+                                 + rng.normal(0, 1e-3, s.pressure_mbar.size))
+                   for p, s in ((2.0, s2), (6.0, s6)))
+    r = identify_data(MeasuredData("m.csv", curves), LoadedSpace.given({2.0: s2, 6.0: s6}),
+                      objective="weighted", repeats=2, noise_um=1.0)
+    assert isinstance(r, Identification)
+    doc = r.to_json()
+    assert list(doc) == ["skinsuction_version", "created_utc", "input", "space", "settings",
+                         "estimate", "at_bound", "best_run", "spread", "E", "iterations",
+                         "noise", "intervals", "geometry", "fit", "runs", "warnings"]
+    assert r.x1d_mpa == doc["estimate"]["x1d_mpa"] == pytest.approx(0.03, rel=0.05)
+    assert r["intervals"] is r.intervals and r.get("nothing", 1) == 1
+    assert list(r.keys()) == list(doc) and "fit" in r and "kind" not in r
+    assert r.input["sha256"] is None and r.settings["objective"] == "weighted"
+    paths = write_identification(r, tmp_path)
+    written = json.loads(paths["json"].read_text(encoding="utf-8"))
+    assert list(written) == list(doc) and written["estimate"] == doc["estimate"]
+    assert paths["png"].stat().st_size > 0 and paths["pdf"].stat().st_size > 0
