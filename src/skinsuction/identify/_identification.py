@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any, ClassVar
+from typing import ClassVar
 
 __all__ = ["Identification", "TimeIdentification", "strict_json"]
 
@@ -211,7 +211,8 @@ class TimeIdentification(_JsonView):
         The space read and its reach; the layers; the settings; the file read
         (``sha256`` None until :func:`~.time_curves.identify_time_file` fills it in).
     runs : dict
-        The window focusing runs of the fit.
+        The window focusing runs of the fit: their iterations, convergence, chi^2,
+        how many were polished, the settings.
     fit : dict
         Per curve: time, pressure, measured and fitted deflections, residuals, phases.
     provenance : dict
@@ -242,7 +243,7 @@ class TimeIdentification(_JsonView):
     geometry: dict
     settings: dict
     input: dict
-    runs: Any
+    runs: dict
     fit: dict
     provenance: dict
     warnings: list
