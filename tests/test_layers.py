@@ -19,7 +19,7 @@ PACKAGE = SRC / "skinsuction"
 
 LAYERS = [
     {"errors", "_files", "_threads", "_argtypes", "_progress", "provenance", "noise", "config",
-     "measured", "jobs"},
+     "measured", "jobs", "results"},
     {"model"},
     {"viscoelastic"},
     {"space"},

@@ -1,4 +1,7 @@
-"""Results files written atomically: a reader never sees a partial file."""
+"""Results files written atomically: a reader never sees a partial file.
+
+What is written (strict JSON, tables, text) is :mod:`skinsuction.results`.
+"""
 
 from __future__ import annotations
 
@@ -43,10 +46,27 @@ def atomic_output(path):
             tmp.unlink()
 
 
-def write_table(frame, path) -> Path:
-    """Write a results table as CSV, atomically."""
+def write_table(frame, path, **to_csv) -> Path:
+    """Write a results table as CSV, atomically.
+
+    Public as :func:`skinsuction.results.write_table`.
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table; its index is not written.
+    path : path-like
+        The CSV file; its folder is created.
+    **to_csv
+        More options of :meth:`pandas.DataFrame.to_csv` (``float_format`` ...).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     with atomic_output(path) as tmp:
-        frame.to_csv(tmp, index=False)
+        frame.to_csv(tmp, index=False, **to_csv)
     return Path(path)
 
 

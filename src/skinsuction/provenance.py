@@ -19,7 +19,6 @@ from __future__ import annotations
 import contextlib
 import datetime as _dt
 import hashlib
-import json
 import logging
 import platform
 import subprocess
@@ -154,27 +153,33 @@ def source_hash(*parts, root=PACKAGE_DIR, length=16) -> str:
 
 
 def jsonable(obj):
-    """``obj`` converted to plain JSON types (NumPy scalars/arrays, paths, sets)."""
-    return json.loads(json.dumps(obj, default=_default))
+    """``obj`` converted to plain JSON types (NumPy scalars/arrays, paths, sets).
 
+    :func:`skinsuction.results.jsonable` as the provenance records have always
+    used it: an object of no JSON type becomes its ``str``, and NaN stays NaN (the
+    records go into Parquet metadata that Python's :mod:`json` reads back; the
+    result files are strict, see :mod:`skinsuction.results`).
 
-def _default(obj):
-    try:
-        import numpy as np
+    Parameters
+    ----------
+    obj : object
+        The record.
 
-        if isinstance(obj, np.generic):
-            return obj.item()
-        if isinstance(obj, np.ndarray):
-            return obj.tolist()
-    except ImportError:  # pragma: no cover
-        pass
-    if isinstance(obj, (set, frozenset, tuple)):
-        return list(obj)
-    if isinstance(obj, Path):
-        return str(obj)
-    if hasattr(obj, "items"):
-        return dict(obj.items())
-    return str(obj)
+    Returns
+    -------
+    object
+        Dicts with string keys, lists, str, int, float, bool and None.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> jsonable({"a": np.float32(0.5), "b": (1, 2), "c": object}) == {
+    ...     "a": 0.5, "b": [1, 2], "c": "<class 'object'>"}
+    True
+    """
+    from skinsuction.results import jsonable as _jsonable
+
+    return _jsonable(obj, strict=False, default=str)
 
 
 def collect(config=None, **extra) -> dict:

@@ -12,30 +12,30 @@ Examples
 
 from __future__ import annotations
 
-import math
-
 import pandas as pd
 
 from skinsuction._files import atomic_output
-
-
-def _cell(x, digits: int = 4) -> str:
-    if isinstance(x, float):
-        if math.isnan(x):
-            return ""
-        return f"{x:.{digits}g}"
-    return str(x)
+from skinsuction.results import markdown_table as _markdown_table
 
 
 def markdown_table(frame: pd.DataFrame, digits: int = 4) -> str:
-    """A GitHub Markdown table; numbers right-aligned, ``digits`` significant digits."""
-    cols = list(frame.columns)
-    num = [pd.api.types.is_numeric_dtype(frame[c]) for c in cols]
-    lines = ["| " + " | ".join(cols) + " |",
-             "|" + "|".join("---:" if n else ":---" for n in num) + "|"]
-    for _, row in frame.iterrows():
-        lines.append("| " + " | ".join(_cell(row[c], digits) for c in cols) + " |")
-    return "\n".join(lines)
+    """A GitHub Markdown table; numbers right-aligned, ``digits`` significant digits.
+
+    :func:`skinsuction.results.markdown_table` of a frame (the one table writer).
+
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        The table.
+    digits : int
+        Significant digits of a float; None and NaN are empty cells.
+
+    Returns
+    -------
+    str
+        The table, without a trailing newline.
+    """
+    return _markdown_table(frame, digits=digits)
 
 
 def write_markdown(path, title: str, sections) -> None:
