@@ -77,7 +77,8 @@ Time curves (Cutometer mode 1 and mode 2, columns ``probe_mm, time_s, pressure_m
 deflection_mm``) are read by :func:`load_time_curves`, which finds the phases of the
 suction, the deflection's resolution and the noise; :func:`r_parameters` gives the
 standard R0-R9 of a mode-1 curve (:mod:`skinsuction.measured._timecurve`,
-:mod:`skinsuction.measured._rparams`, ``docs/time_curves.md``).
+:mod:`skinsuction.measured._phases`, :mod:`skinsuction.measured._rparams`,
+``docs/time_curves.md``); :func:`grid_step` reads the deflection's resolution.
 
 Sizes: at most 2 000 points per curve, 2 000 000 lines and 256 MB per file, so
 that a wrong file fails fast instead of filling the memory.
@@ -109,9 +110,10 @@ from ._checks import (
     PA_ABOVE_MBAR,
     UM_ABOVE_MM,
 )
-from ._geometry import DEFAULT_LAYERS_MM, GEOMETRY_KEYS, Geometry, check_geometry_metadata, geometry_of
+from ._geometry import DEFAULT_LAYERS_MM, GEOMETRY_KEYS, SD_KEYS, Geometry, check_geometry_metadata, geometry_of
 from ._load import StudyEntry, check_against_space, load_measured, load_table
 from ._read import read_measurement
+from ._phases import grid_step
 from ._rparams import R_COLUMNS, RAMP_COLUMNS, r_parameters, ramp_parameters
 from ._timecurve import (
     DEVICE_MAX_MBAR,
@@ -146,8 +148,9 @@ __all__ = [
     "load_table", "read_measurement", "check_against_space", "REQUIRED_COLUMNS", "OPTIONAL_COLUMNS", "MAX_POINTS_PER_CURVE",
     "MAX_ROWS_PER_FILE", "MAX_FILE_BYTES", "PA_ABOVE_MBAR", "BAR_AT_MOST_MBAR", "UM_ABOVE_MM",
     "M_BELOW_MM", "APERTURE_LIMIT", "APERTURE_FLOOR", "LOW_PRESSURE_MBAR",
-    "GEOMETRY_KEYS", "Geometry", "DEFAULT_LAYERS_MM", "check_geometry_metadata", "geometry_of",
+    "GEOMETRY_KEYS", "SD_KEYS", "Geometry", "DEFAULT_LAYERS_MM", "check_geometry_metadata",
+    "geometry_of",
     "load_time_curves", "is_time_curve_file", "TimeCurve", "Cycle", "MeasuredTimeData",
-    "TIME_REQUIRED_COLUMNS", "TIME_OPTIONAL_COLUMNS", "MIN_SAMPLES", "DEVICE_MAX_MBAR",
+    "TIME_REQUIRED_COLUMNS", "TIME_OPTIONAL_COLUMNS", "MIN_SAMPLES", "DEVICE_MAX_MBAR", "grid_step",
     "r_parameters", "ramp_parameters", "R_COLUMNS", "RAMP_COLUMNS",
 ]
