@@ -37,6 +37,7 @@ BOTTOM_STYLE = {
     },
 }
 
+#: The study's Matplotlib settings (:func:`style`).
 RC = {
     "font.size": 9,
     "axes.labelsize": 9,
@@ -56,13 +57,32 @@ RC = {
 
 @contextlib.contextmanager
 def style():
-    """Context in which the study's Matplotlib settings apply."""
+    """Context in which the study's Matplotlib settings (:data:`RC`) apply.
+
+    Public as :func:`skinsuction.figures.figure_style`.
+
+    Yields
+    ------
+    None
+    """
     with plt.rc_context(RC):
         yield
 
 
 def panel_label(ax, text):
-    """Write a panel label such as ``(a)`` in the upper left corner of ``ax``."""
+    """Write a panel label such as ``(a)`` in the upper left corner of ``ax``.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The panel.
+    text : str
+        The label.
+
+    Returns
+    -------
+    None
+    """
     ax.text(
         0.02, 0.98, text, transform=ax.transAxes, ha="left", va="top", fontweight="bold"
     )
@@ -71,8 +91,20 @@ def panel_label(ax, text):
 def save(fig, *paths):
     """Save ``fig`` to each path (format from the suffix) atomically and reproducibly.
 
-    Time stamps are left out of the files so that the same data give the same
-    bytes.
+    Public as :func:`skinsuction.figures.save_figure`.  Time stamps are left out of
+    the files so that the same data give the same bytes.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    *paths : path-like
+        The files (``.png``, ``.pdf``, ``.svg`` ...); each is written through a
+        temporary file and moved into place.
+
+    Returns
+    -------
+    None
     """
     for path in paths:
         path = str(path)
