@@ -748,7 +748,7 @@ def test_causes_solved_in_a_window_around_the_baseline_fit_as_with_every_node(de
 ])
 def test_tie_advice_names_the_thickness_that_decides(tied, measurement, absent):
     # a tie with the free hypodermis must not send the user to measure the dermis
-    from skinsuction.diagnose._diagnose import _tie_breaker_text
+    from skinsuction.diagnose._summary import _tie_breaker_text
     text = _tie_breaker_text(tied)
     assert measurement in text and absent not in text, text
     if "thickness" in measurement:
@@ -782,7 +782,7 @@ def _candidate(cause, delta_bic, removes=True, at_bound=False):
 ])
 def test_decide_with_and_without_the_pattern_gate(base_misfit, gate, candidates, cause,
                                                   verdict, tied):
-    from skinsuction.diagnose._diagnose import decide
+    from skinsuction.diagnose import decide
 
     base_bounds = {"X1d": {"at_bound": False, "neutral": False, "value": 0.1}}
     cands = [_candidate(*c) for c in candidates]
@@ -793,7 +793,7 @@ def test_decide_with_and_without_the_pattern_gate(base_misfit, gate, candidates,
 
 
 def test_decide_flags_the_edge_of_the_model_it_stands_on_under_either_rule():
-    from skinsuction.diagnose._diagnose import decide
+    from skinsuction.diagnose import decide
 
     base_bounds = {"X1d": {"at_bound": False, "neutral": False, "value": 0.1}}
     for gate in (True, False):

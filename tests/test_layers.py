@@ -105,11 +105,10 @@ def private_of_another(name: str, path: Path, root: Path = SRC) -> list:
 PRIVATE_IMPORT_DEBTS = {
     "skinsuction.cohort._run": {"skinsuction.measured._geometry", "skinsuction.diagnose._time",
                                 "skinsuction.diagnose._diagnose", "skinsuction.diagnose._report"},
+    # skinsuction.measured.grid_step is public
     "skinsuction.identify._time_fit": {"skinsuction.measured._timecurve"},
-    "skinsuction.diagnose._time": {"skinsuction.identify._time_fit"},
-    "skinsuction.diagnose._report": {"skinsuction.figures._style"},
+    # skinsuction.figures.save_figure (and figure_style, panel_label ...) are public
     "skinsuction.identify.measured_fit": {"skinsuction.figures._style"},
-    "skinsuction.identify.time_curves": {"skinsuction.figures._style"},
     "skinsuction.paper._figures": {"skinsuction.figures._style"},
 }
 

@@ -27,23 +27,20 @@
      "extended": {...} | null, "gain": {...} | null}
 
 Parameters are in MPa (moduli), mm (thickness), 1 (lambda0); E is eq. 7 of the
-paper in µm on the concatenated fitted points.  See :mod:`._rays` for the ray
-spaces, :mod:`._stats` for the statistics and :mod:`._diagnose` for the rule.
+paper in µm on the concatenated fitted points.  See :mod:`skinsuction.space` for the
+ray spaces, :mod:`._stats` for the statistics, :mod:`._steps` for the steps and
+:mod:`._rule` for the rule.
 How well the rule does (virtual experiments, confusion rates, the space's accuracy)
 is studied in :mod:`skinsuction.evaluation`, which this package does not import.
 """
 
 from skinsuction.space import BASELINE, DEFAULT_CAUSES, NONE, Cause, default_registry, registry_from_config
-from ._diagnose import (
-    BeyondSpaceError,
-    Settings,
-    decide,
-    diagnose,
-    diagnose_file,
-    fit_in_window,
-    prepare_data,
-    ratio_window,
-)
+from ._data import prepare_data
+from ._diagnose import diagnose, diagnose_file
+from ._rule import decide
+from ._settings import Settings
+from ._steps import BeyondSpaceError
+from ._window import fit_in_window, ratio_window
 from ._fit import Fit, FitData, ModelCurves, fit_model, nested_start
 from ._report import write_report
 from ._stats import bic, misfit_test, noise_from_differences, noise_from_replicates

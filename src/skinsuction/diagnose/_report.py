@@ -2,31 +2,11 @@
 
 from __future__ import annotations
 
-import json
-import math
 from pathlib import Path
 
+from skinsuction.results import markdown_table, write_json, write_text
+
 __all__ = ["write_report", "report_markdown"]
-
-
-def _strict(obj):
-    """JSON without NaN/inf (they become null) and with plain Python numbers."""
-    import numpy as np
-
-    if isinstance(obj, dict):
-        return {str(k): _strict(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_strict(v) for v in obj]
-    if isinstance(obj, (np.floating, float)):
-        x = float(obj)
-        return x if math.isfinite(x) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, np.bool_):
-        return bool(obj)
-    if isinstance(obj, np.ndarray):
-        return _strict(obj.tolist())
-    return obj
 
 
 def _num(x, fmt=".3g"):
@@ -63,7 +43,20 @@ def _space_lines(inp: dict) -> list:
 
 
 def report_markdown(report: dict, figures=None) -> str:
-    """The report as Markdown."""
+    """The report as Markdown (``report.md``).
+
+    Parameters
+    ----------
+    report : dict
+        The report of :func:`skinsuction.diagnose.diagnose`.
+    figures : dict, optional
+        ``{name: path}`` of the figures to show (by file name, next to the report).
+
+    Returns
+    -------
+    str
+        Markdown, ending with a newline.
+    """
     b = report["baseline"]
     lines = [
         f"# Diagnosis of {Path(report['input'].get('file') or 'the measured curves').name}",
@@ -95,26 +88,9 @@ def report_markdown(report: dict, figures=None) -> str:
         "",
         "## Candidate causes",
         "",
-        "| cause | extra parameter | E (µm) | E ratio | ΔBIC | misfit left (p) | "
-        "holdout E (µm) | holdout ratio | verdict |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    for c in sorted(report["candidates"], key=lambda c: c["bic"]):
-        x = c["extra_parameter"]
-        unit = "" if x["unit"] == "1" else f" {x['unit']}"
-        flag = ("chosen" if c["cause"] == report["cause"] else
-                "tied with the chosen" if c["cause"] in (report.get("ambiguous_with") or ())
-                else "decisive, but misfit left" if c["decisive"] and not c["removes_misfit"]
-                else "not decisive" if not c["decisive"]
-                else "decisive, higher BIC" if report["cause"] != "none"
-                else "decisive, no pattern (pattern gate on)")
-        bound = " (at bound)" if x["at_bound"] else ""
-        lines.append(
-            f"| {c['cause']} | {x['symbol']} = {x['value']:.3g}{unit}{bound} | {c['E_um']:.3g} | "
-            f"{_num(c['E_ratio'], '.2f')} | {c['delta_bic']:.1f} | "
-            f"{'yes' if c['systematic_misfit'] else 'no'} ({c['misfit_p_value']:.2g}) | "
-            f"{_num(c['holdout_E_um'])} | {_num(c['holdout_ratio'], '.2f')} | {flag} |")
-    lines += [
+        markdown_table([_candidate_cells(c, report)
+                        for c in sorted(report["candidates"], key=lambda c: c["bic"])],
+                       CANDIDATE_COLUMNS, align=False),
         "",
         f"Baseline cross-probe holdout E: {_num(b.get('holdout_E_um'))} µm.",
         "",
@@ -148,6 +124,28 @@ def report_markdown(report: dict, figures=None) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: The columns of the candidates' table of ``report.md``.
+CANDIDATE_COLUMNS = ("cause", "extra parameter", "E (µm)", "E ratio", "ΔBIC", "misfit left (p)",
+                     "holdout E (µm)", "holdout ratio", "verdict")
+
+
+def _candidate_cells(c: dict, report: dict) -> list:
+    """A candidate's row of the table, formatted."""
+    x = c["extra_parameter"]
+    unit = "" if x["unit"] == "1" else f" {x['unit']}"
+    flag = ("chosen" if c["cause"] == report["cause"] else
+            "tied with the chosen" if c["cause"] in (report.get("ambiguous_with") or ())
+            else "decisive, but misfit left" if c["decisive"] and not c["removes_misfit"]
+            else "not decisive" if not c["decisive"]
+            else "decisive, higher BIC" if report["cause"] != "none"
+            else "decisive, no pattern (pattern gate on)")
+    bound = " (at bound)" if x["at_bound"] else ""
+    return [f"{c['cause']}", f"{x['symbol']} = {x['value']:.3g}{unit}{bound}",
+            f"{c['E_um']:.3g}", _num(c["E_ratio"], ".2f"), f"{c['delta_bic']:.1f}",
+            f"{'yes' if c['systematic_misfit'] else 'no'} ({c['misfit_p_value']:.2g})",
+            _num(c["holdout_E_um"]), _num(c["holdout_ratio"], ".2f"), flag]
+
+
 def _geometry_lines(g) -> list:
     if not g:
         return []
@@ -166,10 +164,23 @@ def _geometry_lines(g) -> list:
 def write_report(report: dict, out_dir, figures: bool = True) -> dict:
     """Write ``report.json``, ``report.md`` and (optionally) the figures into ``out_dir``.
 
-    Returns ``{name: path}``.
-    """
-    from skinsuction._files import atomic_output
+    Each file is written atomically; ``report.json`` is strict JSON
+    (:func:`skinsuction.results.write_json`: NaN and infinities are null).
 
+    Parameters
+    ----------
+    report : dict
+        The report of :func:`skinsuction.diagnose.diagnose`.
+    out_dir : path-like
+        The folder (created).
+    figures : bool
+        Also draw ``fit``, ``residuals`` and ``gain`` (PNG and PDF).
+
+    Returns
+    -------
+    dict
+        ``{name: path}``: ``json``, ``md`` and ``<figure>_png``, ``<figure>_pdf``.
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {"json": out / "report.json", "md": out / "report.md"}
@@ -177,19 +188,16 @@ def write_report(report: dict, out_dir, figures: bool = True) -> dict:
     if figures:
         import matplotlib.pyplot as plt
 
-        from skinsuction.figures import _style
+        from skinsuction.figures import save_figure
         from skinsuction.figures.diagnosis import plot_fit, plot_gain, plot_residuals
 
         for name, fn in (("fit", plot_fit), ("residuals", plot_residuals), ("gain", plot_gain)):
             fig = fn(report)
             png, pdf = out / f"{name}.png", out / f"{name}.pdf"
-            _style.save(fig, png, pdf)
+            save_figure(fig, png, pdf)
             plt.close(fig)
             figs[name] = png
             paths[f"{name}_png"], paths[f"{name}_pdf"] = png, pdf
-    with atomic_output(paths["json"]) as tmp:
-        tmp.write_text(json.dumps(_strict(report), indent=1, ensure_ascii=False) + "\n",
-                       encoding="utf-8")
-    with atomic_output(paths["md"]) as tmp:
-        tmp.write_text(report_markdown(report, figs), encoding="utf-8")
+    write_json(paths["json"], report, indent=1, ensure_ascii=False)
+    write_text(paths["md"], report_markdown(report, figs))
     return paths
