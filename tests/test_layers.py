@@ -103,8 +103,6 @@ def private_of_another(name: str, path: Path, root: Path = SRC) -> list:
 #: imports of another subpackage's private module made before the rule was checked:
 #: each is a public name its package should export (module -> private modules)
 PRIVATE_IMPORT_DEBTS = {
-    "skinsuction.cohort._run": {"skinsuction.measured._geometry", "skinsuction.diagnose._time",
-                                "skinsuction.diagnose._diagnose", "skinsuction.diagnose._report"},
     # skinsuction.measured.grid_step is public
     "skinsuction.identify._time_fit": {"skinsuction.measured._timecurve"},
     # skinsuction.figures.save_figure (and figure_style, panel_label ...) are public

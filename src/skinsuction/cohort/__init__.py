@@ -23,10 +23,14 @@ else the single objective of its probe), diagnoses it (optional), and writes
 * ``reports/<row>/`` per measurement (identification and diagnosis files),
   only if asked (big studies would write thousands of folders).
 
-The group comparison (:func:`compare_groups`) is described in ``_compare``.
+The group comparison (:func:`compare_groups`) is described in ``_compare``; the
+measurements are found by ``_discover``, each becomes a row in ``_rows`` (the
+per-curve work), and ``_tables`` writes the frame, ``summary.md`` and the files.
 """
 
 from ._compare import compare_groups
-from ._run import RESULT_COLUMNS, discover, run_study, study_rows
+from ._discover import discover
+from ._rows import RESULT_COLUMNS, study_rows
+from ._run import run_study
 
 __all__ = ["discover", "run_study", "compare_groups", "study_rows", "RESULT_COLUMNS"]
