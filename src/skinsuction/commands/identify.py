@@ -126,7 +126,8 @@ def run(args: argparse.Namespace) -> int:
     int
         0 (errors raise, and the command line prints them).
     """
-    from skinsuction.identify.measured_fit import identify_measured, write_identification
+    from skinsuction.identify import write_identification
+    from skinsuction.identify.measured_fit import identify_measured
     from skinsuction.measured import MeasuredTimeData, read_measurement
 
     data = read_measurement(args.measured)
@@ -185,7 +186,7 @@ def _print_tail(result, paths: dict) -> None:
     result : Identification or TimeIdentification
         The result written.
     paths : dict
-        The files of :func:`skinsuction.identify.measured_fit.write_identification`.
+        The files of :func:`skinsuction.identify.write_identification`.
 
     Returns
     -------
@@ -212,7 +213,7 @@ def _run_time(args: argparse.Namespace, data) -> int:
     int
         0.
     """
-    from skinsuction.identify.measured_fit import write_identification
+    from skinsuction.identify import write_identification
     from skinsuction.identify.time_curves import identify_time_file
 
     if args.objective is not None:

@@ -17,7 +17,8 @@ polished: a :class:`FitResult`) and :func:`profile_intervals`, on any
 :func:`skinsuction.identify.measured_fit.identify_data`) or a
 :class:`TimeIdentification` (time curves,
 :func:`skinsuction.identify.time_curves.identify_time_data`): named fields, and
-``to_json()`` the content of ``identification.json``.
+``to_json()`` the content of ``identification.json``, both written by
+:func:`write_identification`.
 
 Examples
 --------
@@ -44,7 +45,7 @@ from ._engine import (
     polish_run,
     repeated_fit,
 )
-from ._identification import Identification, TimeIdentification
+from ._identification import Identification, TimeIdentification, write_identification
 from ._intervals import (
     Interval,
     LikelihoodIntervals,
@@ -84,6 +85,7 @@ from ._window_focusing import (
 __all__ = [
     "Identification",
     "TimeIdentification",
+    "write_identification",
     "bound_flags",
     "Objective",
     "Chi2Objective",

@@ -4,9 +4,9 @@
 returns for a pressure ramp, :class:`TimeIdentification` what
 :func:`skinsuction.identify.time_curves.identify_time_data` returns for time curves.
 Their fields are the top-level entries of ``identification.json``, in its order;
-:meth:`~Identification.to_json` gives that dict (what
-:func:`skinsuction.identify.measured_fit.write_identification` writes, NaN and
-infinities becoming null) and :meth:`~Identification.figure` its figure.
+:meth:`~Identification.to_json` gives that dict and :meth:`~Identification.figure`
+its figure; :func:`write_identification`, the one writer of both, writes them
+(the JSON strict, :func:`skinsuction.results.write_json`: NaN and infinities null).
 
 While callers move to attribute access, ``result["estimate"]``, ``result.get(...)``,
 ``result.keys()`` and ``"key" in result`` read :meth:`~Identification.to_json`: the
@@ -26,38 +26,13 @@ Examples
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
+from pathlib import Path
 from typing import ClassVar
 
-__all__ = ["Identification", "TimeIdentification", "strict_json"]
+from skinsuction.results import write_json
 
-
-def strict_json(obj):
-    """``obj`` with NaN and infinities replaced by None (strict JSON has neither).
-
-    Parameters
-    ----------
-    obj : dict, list, tuple, float or any JSON-able value
-        Nested dicts and lists (tuples become lists) of JSON values.
-
-    Returns
-    -------
-    object
-        The same structure, every non-finite float None.
-
-    Examples
-    --------
-    >>> strict_json({"a": [1.0, float("nan")], "b": (float("inf"), "x")})
-    {'a': [1.0, None], 'b': [None, 'x']}
-    """
-    if isinstance(obj, dict):
-        return {k: strict_json(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [strict_json(v) for v in obj]
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
+__all__ = ["Identification", "TimeIdentification", "write_identification"]
 
 
 class _JsonView:
@@ -264,3 +239,38 @@ class TimeIdentification(_JsonView):
         from skinsuction.figures.time_fit import plot_time_fit
 
         return plot_time_fit(self.to_json())
+
+
+def write_identification(result: Identification | TimeIdentification, out_dir) -> dict:
+    """Write ``identification.json`` and ``fit.png`` / ``fit.pdf`` into ``out_dir`` (atomically).
+
+    The one writer of ``skinsuction identify``'s results, a pressure ramp's or
+    time curves': the JSON is ``result.to_json()`` (strict:
+    :func:`skinsuction.results.write_json`, indented by 2, ASCII), the figure
+    ``result.figure()`` (:func:`skinsuction.figures.save_figure`).
+
+    Parameters
+    ----------
+    result : Identification or TimeIdentification
+        Of :func:`skinsuction.identify.measured_fit.identify_data` or
+        :func:`skinsuction.identify.time_curves.identify_time_data`.
+    out_dir : path-like
+        The folder (created if missing).
+
+    Returns
+    -------
+    dict
+        ``{"json": path, "png": path, "pdf": path}``.
+    """
+    import matplotlib.pyplot as plt
+
+    from skinsuction.figures import save_figure
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"json": out / "identification.json", "png": out / "fit.png", "pdf": out / "fit.pdf"}
+    write_json(paths["json"], result.to_json(), indent=2, ensure_ascii=True)
+    fig = result.figure()
+    save_figure(fig, paths["png"], paths["pdf"])
+    plt.close(fig)
+    return paths

@@ -9,7 +9,7 @@ SHA-256 of the input files (:func:`identify_measured`: an
 :class:`~skinsuction.identify.Identification`; the steps are in
 :mod:`._ramp_steps`); write it as ``identification.json`` with a plot of
 measured against fitted curves and their residuals (:func:`write_identification`,
-which writes the result of time curves as well).
+the one writer of both kinds of result, defined in :mod:`._identification`).
 
 Every problem of the inputs raises :class:`InputError` or
 :class:`skinsuction.measured.MeasuredDataError` (both ``ValueError``) with a
@@ -33,8 +33,6 @@ Examples
 from __future__ import annotations
 
 import datetime as _dt
-import json
-from pathlib import Path
 
 import numpy as np
 
@@ -42,7 +40,7 @@ from skinsuction._files import file_sha256
 from skinsuction.errors import InputError
 from skinsuction.space import LoadedSpace, load_space
 
-from ._identification import Identification, TimeIdentification, strict_json
+from ._identification import Identification, write_identification
 from ._ramp_intervals import noise_and_intervals, thickness_uncertainty
 from ._ramp_steps import (
     OBJECTIVE_KINDS,
@@ -308,40 +306,3 @@ def _identification(setup: RampSetup, runs: RampRuns, settings, flags, spread, n
               for x, e, n in zip(runs_mpa, rep.E, rep.iterations)],
         warnings=setup.warnings,
     )
-
-
-def write_identification(result: Identification | TimeIdentification, out_dir) -> dict:
-    """Write ``identification.json`` and ``fit.png`` / ``fit.pdf`` into ``out_dir`` (atomically).
-
-    The one writer of ``skinsuction identify``'s results, a pressure ramp's or
-    time curves': the JSON is ``result.to_json()`` (NaN and infinities as null),
-    the figure ``result.figure()``.
-
-    Parameters
-    ----------
-    result : Identification or TimeIdentification
-        Of :func:`identify_data` (:func:`identify_measured`) or
-        :func:`skinsuction.identify.time_curves.identify_time_data`.
-    out_dir : path-like
-        The folder (created if missing).
-
-    Returns
-    -------
-    dict
-        ``{"json": path, "png": path, "pdf": path}``.
-    """
-    import matplotlib.pyplot as plt
-
-    from skinsuction._files import atomic_output
-    from skinsuction.figures import _style
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {"json": out / "identification.json", "png": out / "fit.png", "pdf": out / "fit.pdf"}
-    with atomic_output(paths["json"]) as tmp:
-        tmp.write_text(json.dumps(strict_json(result.to_json()), indent=2) + "\n",
-                       encoding="utf-8")
-    fig = result.figure()
-    _style.save(fig, paths["png"], paths["pdf"])
-    plt.close(fig)
-    return paths

@@ -7,7 +7,7 @@ layers, fit the long-time moduli and one or two Prony terms with the fast path
 every parameter, flag edges, and report the R parameters beside them
 (:func:`identify_time_data`: a :class:`~skinsuction.identify.TimeIdentification`);
 write ``identification.json`` and a fit figure (:func:`write_time_identification`,
-the one writer of :func:`skinsuction.identify.measured_fit.write_identification`).
+the one writer :func:`skinsuction.identify.write_identification`).
 
 Examples
 --------
@@ -28,7 +28,7 @@ import numpy as np
 from skinsuction._files import file_sha256
 from skinsuction.errors import InputError
 
-from ._identification import TimeIdentification
+from ._identification import TimeIdentification, write_identification
 from ._time_fit import (
     MODEL_ERROR,
     TIME_WF,
@@ -388,8 +388,8 @@ def write_time_identification(result: TimeIdentification, out_dir) -> dict:
     """Write ``identification.json`` and ``fit.png`` / ``fit.pdf`` (atomically).
 
     The one writer of both kinds of result,
-    :func:`skinsuction.identify.measured_fit.write_identification`, under the name
-    the time curves' callers know.
+    :func:`skinsuction.identify.write_identification`, under the name the time
+    curves' callers know.
 
     Parameters
     ----------
@@ -403,6 +403,4 @@ def write_time_identification(result: TimeIdentification, out_dir) -> dict:
     dict
         ``{"json": path, "png": path, "pdf": path}``.
     """
-    from .measured_fit import write_identification
-
     return write_identification(result, out_dir)
