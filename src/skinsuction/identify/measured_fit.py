@@ -109,16 +109,14 @@ def identify_measured(
     measured_path : path-like or MeasuredData
         Measured CSV (format: :mod:`skinsuction.measured`), or its curves already read.
     space_path : path-like, optional
-        The scale-free space (its directory or its ``neo_hookean.parquet``), or a
-        grid database such as the paper's (``results/simulated_space/paper.parquet``).
-        Default: ``results/simulated_space/scale_free`` if the workflow has built it
-        under the working directory, else the default space shipped with skinsuction
-        (:func:`skinsuction.space.resolve_space`); ``space.source`` and
-        ``space.description`` of the result say which.
+        The scale-free space (its directory or its ``neo_hookean.parquet``), or a grid
+        database such as ``results/simulated_space/paper.parquet``.  Default: the
+        workflow's ``results/simulated_space/scale_free`` if built here, else the
+        shipped one (:func:`skinsuction.space.resolve_space`; the result's ``space``
+        says which).
     objective : {"single", "weighted", "ratio"}
-        ``single``: the curve of ``probe_mm`` alone (eq. 4); ``weighted``: the 2
-        and 6 mm curves, ``alpha`` on 2 mm (eq. 10); ``ratio``: 6 mm / 2 mm
-        (eqs. 11-12).
+        ``single``: the curve of ``probe_mm`` alone (eq. 4); ``weighted``: the 2 and
+        6 mm curves, ``alpha`` on 2 mm (eq. 10); ``ratio``: 6 mm / 2 mm (eqs. 11-12).
     probe_mm : float
         Probe of the single objective (mm).
     alpha : float in [0, 1]
@@ -137,30 +135,25 @@ def identify_measured(
         ``{probe_mm: GriddedSpace or NeoHookeanSlice}`` instead of ``space_path``
         (tests, notebooks).
     noise_um : float, optional
-        Noise sd of one measured deflection (µm).  By default it is estimated
-        from replicate curves of the fitted probes, else from differences of the
-        fitted curves (:mod:`skinsuction.noise`).
+        Noise sd of one deflection (µm); by default estimated from replicates of the
+        fitted probes, else from differences of the curves (:mod:`skinsuction.noise`).
     level : float
         Confidence level of the profile-likelihood intervals
         (:func:`skinsuction.identify.profile_intervals`).
     thickness : dict, optional
         ``dermis_thickness_mm``, ``hypodermis_thickness_mm`` and their ``_sd_mm``:
         override the file's header lines (:func:`skinsuction.measured.geometry_of`).
-    solve_on_demand : bool
+    solve_on_demand, workers : bool, int
         Solve the neo-Hookean rays of a probe or layers the scale-free space lacks
-        (:class:`skinsuction.space.OnDemandRays`); False refuses such a file.
-    workers : int
-        Processes for those solves.
+        (:class:`skinsuction.space.OnDemandRays`; False refuses such a file), in
+        ``workers`` processes.
 
     Returns
     -------
     Identification
-        ``estimate`` (median over the repeats, MPa), ``best_run``, ``spread``,
-        ``E``, ``iterations``, ``settings``, ``input`` (with the file's SHA-256),
-        ``space``, ``fit``, ``runs``, ``warnings``, ``noise`` and ``intervals``
-        (profile-likelihood intervals of X1d and X1h, their correlation; None
-        with a warning if the noise cannot be estimated); ``to_json()`` is
-        ``identification.json``.
+        The estimate (median over the repeats, polished; MPa), its spread, E, the
+        profile-likelihood intervals, the fitted curves, the settings, the input
+        with its SHA-256 and the warnings; ``to_json()`` is ``identification.json``.
     """
     from skinsuction.measured import MeasuredData, check_against_space, geometry_of, load_measured
 
