@@ -102,13 +102,7 @@ def private_of_another(name: str, path: Path, root: Path = SRC) -> list:
 
 #: imports of another subpackage's private module made before the rule was checked:
 #: each is a public name its package should export (module -> private modules)
-PRIVATE_IMPORT_DEBTS = {
-    # skinsuction.measured.grid_step is public
-    "skinsuction.identify._time_fit": {"skinsuction.measured._timecurve"},
-    # skinsuction.figures.save_figure (and figure_style, panel_label ...) are public
-    "skinsuction.identify.measured_fit": {"skinsuction.figures._style"},
-    "skinsuction.paper._figures": {"skinsuction.figures._style"},
-}
+PRIVATE_IMPORT_DEBTS = {}  # every debt paid: public names only
 
 
 @pytest.mark.parametrize("name", sorted(MODULES))

@@ -163,7 +163,7 @@ def fit_data_of(curve, *, noise_sd_mm: float | None = None, model_error: dict | 
 def _grid_step(d) -> float:
     """The grid the deflections lie on, 0 if none: the loader's rule without its
     20-step range (that misses a small curve, 0.08 mm at 0.01 mm under a 2 mm probe)."""
-    from skinsuction.measured._timecurve import grid_step
+    from skinsuction.measured import grid_step
 
     return grid_step(d, min_steps=2) or 0.0
 

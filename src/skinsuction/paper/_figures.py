@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 
 from skinsuction._files import atomic_output, write_table
-from skinsuction.figures import _style
+from skinsuction.figures import save_figure
 from skinsuction.figures.fig4 import PANELS, plot_fig4
 from skinsuction.figures.fig4b import VALLEY_FACTOR, plot_fig4b
 from skinsuction.figures.fig5 import plot_fig5, table_fig5
@@ -83,7 +83,7 @@ def build_fig4(runs_csv, png, pdf, csv, target, success_tolerance=0.01) -> pd.Da
     table = table_fig4(runs, target, success_tolerance)
     write_table(table, csv)
     fig = plot_fig4(runs, table, target)
-    _style.save(fig, png, pdf)
+    save_figure(fig, png, pdf)
     plt.close(fig)
     return table
 
@@ -103,7 +103,7 @@ def build_fig4b(space_path, test_curves_path, png, pdf, csv, landscape_out, sett
     summary.insert(0, "source", source)
     write_table(summary, csv)
     fig = plot_fig4b(land, summary, setup.target, alpha)
-    _style.save(fig, png, pdf)
+    save_figure(fig, png, pdf)
     plt.close(fig)
     return summary
 
@@ -145,7 +145,7 @@ def build_fig5(measured_csv, space_parquet, png, pdf, csv, runs_csv=None, probe_
     if runs_csv:
         write_table(runs, runs_csv)
     fig = plot_fig5(runs, table, truth, probe_mm)
-    _style.save(fig, png, pdf)
+    save_figure(fig, png, pdf)
     plt.close(fig)
     return table
 
@@ -200,7 +200,7 @@ def build_fig6(report_json, check_csv, png, pdf, csv):
     write_table(table, csv)
     fig = plot_fig6(check, table, title=f"{report['input'].get('file')}: diagnosis "
                                         f"'{report['cause']}'")
-    _style.save(fig, png, pdf)
+    save_figure(fig, png, pdf)
     plt.close(fig)
     return table
 
@@ -237,7 +237,7 @@ def build_fig7(runs_csv, png, pdf, csv, threshold_csv, target, success_tolerance
     write_table(table, csv)
     write_table(threshold, threshold_csv)
     fig = plot_fig7(runs, table, target)
-    _style.save(fig, png, pdf)
+    save_figure(fig, png, pdf)
     plt.close(fig)
     return table
 
@@ -279,7 +279,7 @@ def build_fig8(space_path, test_curves_path, runs_csv, png, pdf, csv, curves_csv
     curves = curves_fig8(setup, runs)
     write_table(curves, curves_csv)
     fig = plot_fig8(curves, runs, setup.target)
-    _style.save(fig, png, pdf)
+    save_figure(fig, png, pdf)
     plt.close(fig)
     return table
 
