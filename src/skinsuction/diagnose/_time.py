@@ -67,6 +67,38 @@ def _fit_json(fit, data, name) -> dict:
             "phases": _phase_table(fit, data)}
 
 
+def _bound_flags(rays, fd, fits, warnings) -> dict:
+    """Each fit's at-bound flags (stored in its JSON), a loud warning for each."""
+    from skinsuction.identify import time_bound_flags
+
+    keys = [("scale_free_space.load.max (the largest suction over load.max sets the lowest "
+             "X1d)", "scale_free_space.x1d_mpa.max"),
+            ("scale_free_space.ratio", "scale_free_space.ratio")]
+    at_bound = {}
+    for label, fit, js in fits:
+        flags = time_bound_flags(rays, fd, fit, keys)
+        js["at_bound"] = flags
+        for name, fl in flags.items():
+            if fl["at_bound"]:
+                at_bound.setdefault(label, []).append(name)
+                warnings.append(f"AT BOUND: the {label} fit's {name} sits at the {fl['side']} "
+                                f"edge of the {'space' if name in ('X1d', 'X1h') else 'spectrum'}"
+                                f" ({fl['edge']}): widen {fl['config_key']}; its value is "
+                                "a bound, not an estimate")
+    return at_bound
+
+
+def _gain(el, ve, delta_bic) -> dict:
+    """What creep gains: BIC, chi^2 and the RMS of each phase of each curve."""
+    gain = {"delta_bic": float(delta_bic), "delta_chi2": float(ve["chi2"] - el["chi2"]),
+            "rms_um": {}}
+    for a, b in zip(el["phases"], ve["phases"]):
+        gain["rms_um"][a["curve"]] = {ph: {"elastic": a["phases"][ph]["rms_um"],
+                                           "viscoelastic": b["phases"][ph]["rms_um"]}
+                                      for ph in a["phases"]}
+    return gain
+
+
 def diagnose_time_data(data, space, settings: Settings | None = None, *, thickness=None,
                        probes=None, curve=None) -> dict:
     """Diagnose loaded time curves (:class:`skinsuction.measured.MeasuredTimeData`).
@@ -92,8 +124,7 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
     """
     from skinsuction import __version__
     from skinsuction.identify import IdentificationError
-    from skinsuction.identify import (fit_time_model, laplace_intervals,
-                                      time_bound_flags)
+    from skinsuction.identify import fit_time_model, laplace_intervals
     from skinsuction.identify.time_curves import prepare_time_fit
     from skinsuction.provenance import collect
 
@@ -117,20 +148,8 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
     named = VISCOELASTIC_CREEP if (misfit and delta_bic <= settings.delta_bic) else "none"
     verdict = "cause_found" if named != "none" else "neo_hookean_fits"
     intervals = laplace_intervals(rays, fd, visco, level=settings.level)
-    keys = [("scale_free_space.load.max (the largest suction over load.max sets the lowest "
-             "X1d)", "scale_free_space.x1d_mpa.max"),
-            ("scale_free_space.ratio", "scale_free_space.ratio")]
-    at_bound = {}
-    for label, fit, js in (("elastic", elastic, el), ("viscoelastic", visco, ve)):
-        flags = time_bound_flags(rays, fd, fit, keys)
-        js["at_bound"] = flags
-        for name, fl in flags.items():
-            if fl["at_bound"]:
-                at_bound.setdefault(label, []).append(name)
-                warnings.append(f"AT BOUND: the {label} fit's {name} sits at the {fl['side']} "
-                                f"edge of the {'space' if name in ('X1d', 'X1h') else 'spectrum'}"
-                                f" ({fl['edge']}): widen {fl['config_key']}; its value is "
-                                "a bound, not an estimate")
+    at_bound = _bound_flags(rays, fd, (("elastic", elastic, el),
+                                        ("viscoelastic", visco, ve)), warnings)
     if named != "none" and ve["misfit_p"] < settings.alpha:
         warnings.append(f"the viscoelastic fit still misfits (chi^2 {ve['chi2']:.4g} on "
                         f"{ve['points']} points, p = {ve['misfit_p']:.2g}): creep explains "
@@ -139,12 +158,7 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
         warnings.append(f"the elastic fit misfits (p = {el['misfit_p']:.2g}) but creep does "
                         f"not earn its two parameters (BIC {delta_bic:+.1f} > "
                         f"{settings.delta_bic:g}): unexplained misfit")
-    gain = {"delta_bic": float(delta_bic), "delta_chi2": float(ve["chi2"] - el["chi2"]),
-            "rms_um": {}}
-    for a, b in zip(el["phases"], ve["phases"]):
-        gain["rms_um"][a["curve"]] = {ph: {"elastic": a["phases"][ph]["rms_um"],
-                                           "viscoelastic": b["phases"][ph]["rms_um"]}
-                                      for ph in a["phases"]}
+    gain = _gain(el, ve, delta_bic)
     report = {
         "kind": "time curves",
         "skinsuction_version": __version__,
