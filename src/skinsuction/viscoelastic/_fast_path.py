@@ -82,9 +82,10 @@ def fast_history(elastic_curve, prony, times_s, pressures_mbar):
 
     Examples
     --------
-    >>> from skinsuction.model import simulate
+    >>> from skinsuction.model import Skin, simulate
     >>> from skinsuction.viscoelastic import Prony
-    >>> curve = simulate(0.08, 4.1e-3, pressures_mbar=range(0, 41, 4), mesh={"refinement": 0.5})
+    >>> curve = simulate(Skin.two_layer(0.08, 4.1e-3), pressures_mbar=range(0, 41, 4),
+    ...                  mesh={"refinement": 0.5})
     >>> m = fast_history(curve, Prony([1.0], [0.2]), [0, 0.001, 0.2, 1.0, 3.0], [0, 40, 40, 40, 40])
     >>> [round(float(v / m[-1]), 2) for v in m[1:]]
     [0.5, 0.69, 0.96, 1.0]
