@@ -32,9 +32,9 @@ subclasses :class:`Chi2Objective` and gives its residual blocks.
 Who uses what
 -------------
 * the ramp identification (:func:`skinsuction.identify.measured_fit.identify_data`):
-  100 runs (:func:`identify_repeated`), the median of their estimates (the paper's
-  statistic), :func:`polish` from it, :func:`profile_intervals`; the same as
-  ``repeated_fit(..., estimate="median", skip_failed=False)``;
+  :func:`repeated_fit` with ``estimate="median", skip_failed=False``: 100 runs,
+  the median of their estimates (the paper's statistic), polished, then
+  :func:`profile_intervals`;
 * the time curves (:func:`skinsuction.identify.fit_time_model`):
   :func:`repeated_fit` with the looser stop ``TIME_WF`` and the polish
   ``TIME_POLISH`` (its own Jacobian), then :func:`laplace_intervals`;

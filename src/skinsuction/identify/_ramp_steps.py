@@ -23,8 +23,8 @@ from skinsuction.errors import InputError
 
 from ._bounds import bound_flags
 from ._objectives import ratio_objective, single_objective, weighted_objective
-from ._polish import polish
-from ._window_focusing import IdentificationError, identify_repeated
+from ._engine import repeated_fit
+from ._window_focusing import IdentificationError
 
 __all__ = ["OBJECTIVE_KINDS", "SPREAD_WARNING", "RampSetup", "RampRuns", "check_settings",
            "probes_of", "pick_curve", "make_objective", "setup_ramp", "run_ramp",
@@ -193,22 +193,22 @@ def run_ramp(setup: RampSetup, wf: dict, repeats: int, seed: int) -> RampRuns:
     """
     obj = setup.obj
     try:
-        rep = identify_repeated(obj, repeats=int(repeats), seed=int(seed), **wf)
+        # the paper's statistic: the coordinate-wise median of the runs' candidates
+        # (MPa on a grid space, logs on the scale-free one); the window focusing stops
+        # near, not on, the minimum of a flat valley or of a bound, so a bounded
+        # least-squares polish from the median finishes the job (and tells whether the
+        # best fit of the space sits on its edge)
+        fit = repeated_fit(obj, repeats=int(repeats), seed=int(seed), focus_options=wf,
+                           estimate="median", skip_failed=False)
     except IdentificationError as err:
         raise InputError(f"{setup.data.path}: beyond the simulated space: no candidate of "
                          f"{setup.space.info['path'] or 'the space'} has a curve over the "
                          f"measured pressures ({err}); see the coverage frontier "
                          "(results/tables/scale_free_coverage.csv)") from None
-    # the runs' candidates (theta: MPa on a grid space, logs on the scale-free one)
-    est_theta = np.median(rep.estimates, axis=0)
-    # the window focusing stops near, not on, the minimum of a flat valley or of a
-    # bound: a bounded least-squares polish from the median finishes the job (and
-    # tells whether the best fit of the space sits on its edge)
-    wf_est = obj.to_moduli(est_theta)[0]
-    est_theta = polish(obj, est_theta)
-    e_est = float(obj.error(float(obj(est_theta.reshape(1, 2))[0])))
-    return RampRuns(rep, obj.to_moduli(rep.estimates), int(np.argmin(rep.E)), wf_est,
-                    est_theta, obj.to_moduli(est_theta)[0], e_est)
+    rep = fit.runs
+    e_est = float(obj.error(float(obj(fit.x.reshape(1, 2))[0])))
+    return RampRuns(rep, obj.to_moduli(rep.estimates), int(np.argmin(rep.E)),
+                    obj.to_moduli(fit.start)[0], fit.x, obj.to_moduli(fit.x)[0], e_est)
 
 
 # ------------------------------------------------------------------ bounds and runs
