@@ -147,3 +147,31 @@ def test_correlated_space_error_whitening_is_the_chi2_of_its_covariance():
     # the correlated term forgives a bias along v far more than one across it
     along = (decorrelate((v / sd)[None, :], a, gamma) ** 2).sum()
     assert along < 0.5 * ((v / sd) ** 2).sum()
+
+
+def test_weighted_likelihood_takes_each_curves_own_probe_error_profile():
+    # a weighted fit of 4 + 8 mm curves holds them in the objective's small/large slots;
+    # the correlated space error of each must be its own probe's (the 8 mm one is
+    # several times the 6 mm one), not the 2 and 6 mm profiles of the slot names
+    from skinsuction.identify import weighted_objective
+    from skinsuction.identify._space_error import likelihood_residuals, point_sd
+    from skinsuction.identify.measured_fit import decorrelate, space_error_direction
+
+    s4, s8 = analytic_surrogate_space(4.0), analytic_surrogate_space(8.0)
+    x = np.array([[0.02, 0.0005]])
+    m4, m8 = evaluate(s4, x)[0], evaluate(s8, x)[0]
+    obj = weighted_objective(s4, (s4.pressure_mbar, m4 * 1.01), s8, (s8.pressure_mbar, m8 * 1.01))
+    z = likelihood_residuals(obj, "weighted", None, 2e-3, x1d_mpa=0.02)(x)
+    expected = []
+    for probe, o in ((4.0, obj.objective_2mm), (8.0, obj.objective_6mm)):
+        sd = point_sd(2e-3, o.measured_mm, 2e-3)
+        a, g = space_error_direction(probe, o.pressure_mbar, o.measured_mm, 0.02, sd)
+        expected.append(decorrelate(o.residuals(x) / sd, a, g))
+    np.testing.assert_allclose(z, np.concatenate(expected, axis=1), rtol=1e-12)
+    # and the 2/6 mm profiles give a measurably different chi2 here
+    wrong = []
+    for probe, o in ((2.0, obj.objective_2mm), (6.0, obj.objective_6mm)):
+        sd = point_sd(2e-3, o.measured_mm, 2e-3)
+        a, g = space_error_direction(probe, o.pressure_mbar, o.measured_mm, 0.02, sd)
+        wrong.append(decorrelate(o.residuals(x) / sd, a, g))
+    assert abs((z ** 2).sum() / (np.concatenate(wrong, axis=1) ** 2).sum() - 1) > 0.01

@@ -195,17 +195,20 @@ def likelihood_residuals(obj, objective, curves, sigma_mm, model_error=MODEL_ERR
     callable
         ``theta (N, 2) -> residuals / sd (N, n)``.
     """
-    def block(o, p):
+    def block(o):
+        # each curve's own probe: a weighted fit of 4 + 8 mm curves holds them in its
+        # objective_2mm / objective_6mm slots (the small and the large probe)
         sd = point_sd(sigma_mm, o.measured_mm, model_error)
         a, g = ((None, 0.0) if x1d_mpa is None else
-                space_error_direction(p, o.pressure_mbar, o.measured_mm, x1d_mpa, sd))
+                space_error_direction(o.space.probe_mm, o.pressure_mbar, o.measured_mm,
+                                      x1d_mpa, sd))
         return sd, a, g
 
     if objective == "single":
-        sd, a, g = block(obj, obj.space.probe_mm)
+        sd, a, g = block(obj)
         return lambda t: decorrelate(obj.residuals(t) / sd, a, g)
     if objective == "weighted":
-        b2, b6 = block(obj.objective_2mm, 2.0), block(obj.objective_6mm, 6.0)
+        b2, b6 = block(obj.objective_2mm), block(obj.objective_6mm)
         return lambda t: np.concatenate(
             [decorrelate(obj.objective_2mm.residuals(t) / b2[0], b2[1], b2[2]),
              decorrelate(obj.objective_6mm.residuals(t) / b6[0], b6[1], b6[2])], axis=1)
