@@ -18,6 +18,7 @@ import pytest
 import yaml
 
 from skinsuction import paper
+from test_workflow import install_stand_in
 from skinsuction.model import Skin
 from skinsuction.identify import analytic_surrogate_space, surrogate_curve, write_surrogate_space
 from skinsuction.paper import (
@@ -174,20 +175,16 @@ X1H = [1.0e-5, 4.1e-4, 8.1e-4, 1.21e-3, 1.61e-3, 2.01e-3]
 STAND_IN = '''"""Stand-in for the FE model (workflow tests only): the analytic surrogate."""
 from types import SimpleNamespace as Curve  # noqa: F401
 
-from skinsuction.identify import surrogate_curve as simulate  # noqa: F401
+# the real value types (kept by install_stand_in): every package reads skins
+from ._curve import ParameterError  # noqa: F401
+from ._prony import Prony  # noqa: F401
+from ._skin import Layer, Probe, Ramp, Skin  # noqa: F401
 
 
-class Skin:  # the stand-in's: the paper's two layers, their X1 by path
-    def __init__(self, values):
-        self.values = values
+def simulate(*args, **kwargs):  # read when called: identify imports space, space this
+    from skinsuction.identify import surrogate_curve
 
-    @classmethod
-    def two_layer(cls, x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, bottom="fixed",
-                  prestretch=1.0):
-        return cls({"dermis.X1": x1d, "hypodermis.X1": x1h})
-
-    def get(self, path):
-        return self.values[path]
+    return surrogate_curve(*args, **kwargs)
 '''
 CONFIG = {
     "spaces": {"tiny": {"probes_mm": [2, 6], "x1d": X1D, "x1h": X1H}},
@@ -244,10 +241,7 @@ def workflow_run(tmp_path_factory):
             shutil.copytree(src, wd / part, ignore=shutil.ignore_patterns("__pycache__"))
         else:
             shutil.copy(src, wd / part)
-    model = wd / "src" / "skinsuction" / "model"
-    shutil.rmtree(model)
-    model.mkdir()
-    (model / "__init__.py").write_text(STAND_IN)
+    install_stand_in(wd, STAND_IN)
     (wd / "config" / "tiny.yaml").write_text(yaml.safe_dump(CONFIG))
     # the space and its curve files as the workflow would have made them
     write_surrogate_space(wd / "results" / "simulated_space" / "tiny.parquet", X1D, X1H,

@@ -21,7 +21,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 
-from test_workflow import STAND_IN_MODEL, copy_workflow, snakemake, write_config
+from test_workflow import STAND_IN_MODEL, copy_workflow, install_stand_in, snakemake, write_config
 
 SLOW_MODEL = STAND_IN_MODEL.replace(
     "    info = {\"stand_in\": True, \"mesh\": mesh}",
@@ -41,10 +41,7 @@ DB = "results/simulated_space/grid.parquet"
 def _workdir(tmp_path, name):
     (tmp_path / name).mkdir()
     wd = copy_workflow(tmp_path / name)
-    model = wd / "src" / "skinsuction" / "model"
-    shutil.rmtree(model)
-    model.mkdir()
-    (model / "__init__.py").write_text(SLOW_MODEL)
+    install_stand_in(wd, SLOW_MODEL)
     return wd, write_config(wd, "resume", CONFIG)
 
 

@@ -170,22 +170,14 @@ class Curve:  # the fields of skinsuction.model.Curve
     info: dict = field(default_factory=dict)
 
 
-class ParameterError(ValueError):
-    pass
-
-
-class Skin:  # the stand-in's: the two-layer values as given
-    def __init__(self, **values):
-        self.values = values
-
-    @classmethod
-    def two_layer(cls, x1d, x1h, x2d=0.0, x2h=0.0, t_d=1.0, t_h=1.0, bottom="fixed",
-                  prestretch=1.0):
-        return cls(x1d=x1d, x1h=x1h, bottom=bottom)
+# the real value types (kept by install_stand_in): every package reads skins
+from ._curve import ParameterError  # noqa: F401
+from ._prony import Prony  # noqa: F401
+from ._skin import Layer, Probe, Ramp, Skin  # noqa: F401
 
 
 def simulate(skin, probe=6.0, pressures_mbar=None, mesh=None):
-    x1d, x1h, bottom, probe_mm = skin.values["x1d"], skin.values["x1h"], skin.values["bottom"], probe
+    x1d, x1h, bottom, probe_mm = skin.get("dermis.X1"), skin.get("hypodermis.X1"), skin.bottom, probe
     p = np.arange(0, 101, 2.0) if pressures_mbar is None else np.asarray(pressures_mbar, float)
     soft = {"fixed": 1.0, "axial": 1.05, "free": 1.3}[bottom]
     m = soft * 0.02 * probe_mm * np.sqrt(p) / (x1d * 40 + x1h * 400) ** 0.3
@@ -195,6 +187,22 @@ def simulate(skin, probe=6.0, pressures_mbar=None, mesh=None):
                      25, 100, 0.01, info)
     return Curve(p, m, True, float(p[-1]), "", 2 * len(p), 100, 0.01, info)
 '''
+
+
+#: The modules of the real model a stand-in keeps: its value types, no FE.
+VALUE_MODULES = ("_curve.py", "_prony.py", "_skin.py")
+
+
+def install_stand_in(workdir, source=None):
+    """Replace the FE model of a workflow copy by a stand-in, keeping its value types."""
+    model = workdir / "src" / "skinsuction" / "model"
+    for f in model.iterdir():
+        if f.is_dir():
+            shutil.rmtree(f)
+        elif f.name not in VALUE_MODULES:
+            f.unlink()
+    (model / "__init__.py").write_text(STAND_IN_MODEL if source is None else source)
+    return model
 
 TINY = {
     "spaces": {
@@ -221,10 +229,7 @@ def write_config(workdir, name, config):
 @pytest.fixture(scope="module")
 def stand_in_run(tmp_path_factory):
     workdir = copy_workflow(tmp_path_factory.mktemp("plumbing"))
-    model = workdir / "src" / "skinsuction" / "model"
-    shutil.rmtree(model, ignore_errors=True)
-    model.mkdir()
-    (model / "__init__.py").write_text(STAND_IN_MODEL)
+    install_stand_in(workdir)
     args = write_config(workdir, "tiny", TINY)
     out = snakemake(workdir, "--cores", "2", *args)
     return workdir, args, out
@@ -325,10 +330,7 @@ def test_stand_in_scale_free_space_bundles_assembly_and_coverage(tmp_path):
     from skinsuction.space import read_ray_spaces
 
     workdir = copy_workflow(tmp_path)
-    model = workdir / "src" / "skinsuction" / "model"
-    shutil.rmtree(model, ignore_errors=True)
-    model.mkdir()
-    (model / "__init__.py").write_text(STAND_IN_MODEL)
+    install_stand_in(workdir)
     args = write_config(workdir, "tiny_sf", TINY_SCALE_FREE)
     counts = job_counts(snakemake(workdir, "--cores", "2", *args, "scale_free_space"))
     # one job per (model, probe, ratio); the neutral rays once, in the neo-Hookean bundles

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from skinsuction.space import BASELINE, NONE
+from skinsuction.space import BASELINE, NONE, load
 
 __all__ = ["WIDE_DOMAIN", "draw_wide", "domain_from_config", "given_keywords", "run_draw",
            "run_draws", "initial_stress_kpa"]
@@ -80,7 +80,7 @@ def draw_wide(seed: int, cause, domain=None, load_max=None) -> dict:
     ratio = math.exp(rng.uniform(*np.log(d["x1h_over_x1d"])))
     noise = rng.uniform(*d["noise_um"])
     p_max, p_step = d["protocols"][rng.integers(len(d["protocols"]))]
-    if load_max is not None and p_max / x1d > load_max:  # beyond the space's reach
+    if load_max is not None and load(p_max, x1d) > load_max:  # beyond the space's reach
         p_max, p_step = d["protocols"][0]
     out = {"x1d": x1d, "ratio": ratio, "noise_um": noise, "p_max": p_max, "p_step": p_step,
            "coordinate": None, "value": None, "probes": (2.0, 6.0), "t_d": 1.0,

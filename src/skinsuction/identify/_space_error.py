@@ -15,6 +15,8 @@ import math
 
 import numpy as np
 
+from skinsuction.space import load
+
 __all__ = ["MODEL_ERROR_RELATIVE", "MODEL_ERROR_MM", "SPACE_ERROR_LOADS", "SPACE_ERROR_RMS",
            "point_sd", "space_error_rms", "space_error_direction", "decorrelate",
            "likelihood_residuals"]
@@ -131,7 +133,7 @@ def space_error_direction(probe_mm, pressure_mbar, measured_mm, x1d_mpa, sd):
     rms = space_error_rms(probe_mm)
     if rms is None:
         return None, 0.0
-    q = np.asarray(pressure_mbar, dtype=float) / float(x1d_mpa)
+    q = load(pressure_mbar, float(x1d_mpa))
     v = np.interp(q, SPACE_ERROR_LOADS, rms) * np.abs(measured_mm) / sd
     norm = float(np.sqrt(v @ v))
     if norm == 0.0:

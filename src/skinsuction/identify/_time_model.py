@@ -38,7 +38,7 @@ import math
 
 import numpy as np
 
-from skinsuction.space import LagrangeAxis, RayInterpolant
+from skinsuction.space import LagrangeAxis, RayInterpolant, reference_pressure
 
 __all__ = ["G_BOUNDS", "TAU_BOUNDS_S", "retardation", "effective_pressures", "clean_pressure",
            "ElasticRays", "theta_names"]
@@ -234,7 +234,8 @@ class ElasticRays:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         rays = self._interp.combined_rays(theta)  # (N, n_p), the space's NaN policy
         n, T = pressure_mbar.shape
-        q = np.maximum(pressure_mbar, 0.0) * (self.x1d_ref / 10.0 ** theta[:, 0])[:, None]
+        q = reference_pressure(np.maximum(pressure_mbar, 0.0), (10.0 ** theta[:, 0])[:, None],
+                               self.x1d_ref)
         start, w = self._axis.weights(q.reshape(-1))
         flat = rays.reshape(-1)
         first = np.repeat(np.arange(n) * rays.shape[1], T) + start

@@ -25,6 +25,8 @@ Modules:
 * ``_interpolate``: a grid of one probe (:class:`GriddedSpace`) interpolated,
   with its NaN policy;
 * ``_causes``: the causes and their ray coordinates;
+* ``_coordinates``: a skin's coordinates in the space (ratio, load, t/a, cause
+  coordinate) and back (:class:`SpaceCoordinates`);
 * ``_rays``: which rays a scale-free space has (ids, :class:`RaySpec`, FE jobs);
 * ``_ray_space``: the rays stored and read back (:class:`RaySpace`);
 * ``_ray_solve``, ``_ray_interpolate``: the rays solved and interpolated;
@@ -78,6 +80,7 @@ from ._grid import (
 )
 from ._interpolate import GriddedSpace, SpaceInterpolant, evaluate, interpolate_pressure
 from ._lagrange import LagrangeAxis
+from ._coordinates import SpaceCoordinates, load, reference_pressure, similar_length
 from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
 from ._open import LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
@@ -174,4 +177,5 @@ __all__ = [
     "DEFAULT_LAYERS_MM", "Geometry", "GeometryOutsideSpace", "OnDemandRays",
     "default_cache_dir", "spaces_at", "ThicknessNuisance", "window_nodes",
     "THICKNESS_RESOLUTION_MM", "LAYER_PATHS", "layer_thicknesses",
+    "SpaceCoordinates", "load", "reference_pressure", "similar_length",
 ]

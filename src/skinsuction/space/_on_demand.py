@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._coordinates import LAYER_PATHS, similar_length
 from ._rays import _ray_params, ray_id
 from ._storage import AXIS_PATHS, _read_parquet, _write_parquet, round_sig
 
@@ -34,8 +35,6 @@ log = logging.getLogger(__name__)
 
 __all__ = ["OnDemandRays", "default_cache_dir", "layer_thicknesses", "LAYER_PATHS"]
 
-#: The layers rays are solved for, by parameter path (the paper's two layers).
-LAYER_PATHS = (AXIS_PATHS["t_d"], AXIS_PATHS["t_h"])
 #: The ray-id keyword (a grid axis) of each layer path.
 _LAYER_KEYWORDS = {AXIS_PATHS[key]: key for key in ("t_d", "t_h")}
 
@@ -189,7 +188,8 @@ class OnDemandRays:
             raise ValueError(f"ratio nodes {nodes} are not nodes of the ray specification "
                              f"{self.spec.ratio_nodes}")
         a = probe_mm / 2
-        ref = {path: round_sig(t / a, 6) for path, t in layer_thicknesses(layers).items()}
+        ref = {path: round_sig(similar_length(t, probe_mm), 6)
+               for path, t in layer_thicknesses(layers).items()}
         if cause is None:
             return self._read(ref, a, None, None, nodes)
         columns, infos = [], []
@@ -213,7 +213,7 @@ class OnDemandRays:
             coord = None
         else:
             # a thickness node is a length: it scales with the aperture like the layers
-            coord = round_sig(c / a, 6) if cause.geometric else c
+            coord = round_sig(similar_length(c, 2 * a), 6) if cause.geometric else c
             path = self.dir / f"{stem}__{cause.keyword}{coord:g}.parquet"
         ids = self._ray_ids(2.0, ref, cause, coord, nodes)
         if not path.exists():

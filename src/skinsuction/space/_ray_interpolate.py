@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 
+from ._coordinates import reference_pressure
 from ._interpolate import GriddedSpace, SpaceInterpolant
 from ._lagrange import LagrangeAxis
 from ._ray_space import RaySpace
@@ -205,7 +206,7 @@ class RayInterpolant:
         x1d = 10.0 ** theta[:, 0]
         # the scaling law: the candidate at p reads its ray at load p / X1d, i.e. at the
         # pressure p X1d_ref / X1d of the FE run; beyond the ray's reach: NaN
-        q = self.pressure_mbar[None, :] * (self.x1d_ref / x1d)[:, None]  # (N, u)
+        q = reference_pressure(self.pressure_mbar[None, :], x1d[:, None], self.x1d_ref)  # (N, u)
         start, w = self._axis_p.weights(q.reshape(-1))
         m = self._axis_p.m
         # the stencil of (candidate, pressure) in the flat rays, gathered one node
