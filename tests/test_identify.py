@@ -477,6 +477,7 @@ def test_identify_data_returns_an_identification_whose_json_is_the_file(s2, s6, 
     import json
 
     from skinsuction.identify import Identification
+    from skinsuction.model import Skin
     from skinsuction.identify.measured_fit import identify_data, write_identification
     from skinsuction.measured import MeasuredCurve, MeasuredData
     from skinsuction.space import LoadedSpace
@@ -491,8 +492,12 @@ def test_identify_data_returns_an_identification_whose_json_is_the_file(s2, s6, 
     doc = r.to_json()
     assert list(doc) == ["skinsuction_version", "created_utc", "input", "space", "settings",
                          "estimate", "at_bound", "best_run", "spread", "E", "iterations",
-                         "noise", "intervals", "geometry", "fit", "runs", "warnings"]
+                         "noise", "intervals", "geometry", "fit", "runs", "warnings", "skin"]
     assert r.x1d_mpa == doc["estimate"]["x1d_mpa"] == pytest.approx(0.03, rel=0.05)
+    # the fitted skin: the estimate on the layers assumed
+    skin = Skin.from_dict(doc["skin"])
+    assert skin.get("dermis.X1") == r.x1d_mpa and skin.get("hypodermis.X1") == r.x1h_mpa
+    assert skin.thicknesses == (1.0, 1.0)
     assert r["intervals"] is r.intervals and r.get("nothing", 1) == 1
     assert list(r.keys()) == list(doc) and "fit" in r and "kind" not in r
     assert r.input["sha256"] is None and r.settings["objective"] == "weighted"

@@ -209,6 +209,18 @@ def test_identify_on_a_fresh_install_reads_the_shipped_space(tmp_path):
     iv = result["intervals"]
     assert iv["X1d"]["lower"] < 0.04 < iv["X1d"]["upper"]  # the example's truth
     assert not (tmp_path / "results").exists()
+    # the fitted skin it records runs through the FE model as it is: its curve is the
+    # space's fitted curve to the space's accuracy (0.2 % of M, or 0.3 µm)
+    sim = subprocess.run([sys.executable, "-m", "skinsuction", "simulate", "--probe", "6",
+                          "--skin", "out/x/identification.json"],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert sim.returncode == 0, sim.stdout + sim.stderr
+    rows = [line for line in sim.stdout.splitlines() if line and line[0].isdigit()]
+    fe = np.loadtxt(rows, delimiter=",")
+    fit = result["fit"]["6"]
+    fitted = np.interp(fe[:, 0], fit["pressure_mbar"], fit["fitted_mm"])
+    assert np.all(np.abs(fe[:, 1] - fitted) <= 2e-3 * fitted + 0.3e-3)
+    assert fe[-1, 1] > 0.1  # the 6 mm dome of the example, not an empty curve
 
 
 def test_diagnose_and_study_report_the_shipped_space(tmp_path, monkeypatch):

@@ -19,13 +19,15 @@
 
     {"input": {"file", "sha256", "probes_mm"}, "noise_um",
      "baseline": {"model": "neo_hookean", "parameters": {"X1d", "X1h"}, "E_um",
-                  "systematic_misfit", "description"},
-     "candidates": [{"cause", "parameters", "E_um", "delta_bic", "holdout_E_um"}],
+                  "systematic_misfit", "description", "skin"},
+     "candidates": [{"cause", "parameters", "E_um", "delta_bic", "holdout_E_um", "skin"}],
      "cause": "none" | "beyond_space" | <cause>,
      "verdict": "neo_hookean_fits" | "cause_found" | "unexplained_misfit" | "beyond_space",
      "beyond_space": [{"model", "parameter", "side", "edge", "config_key", "value"}],
      "extended": {...} | null, "gain": {...} | null}
 
+Every fit records the skin it describes (``"skin"``, :meth:`skinsuction.model.Skin.to_dict`),
+which :meth:`~skinsuction.model.Skin.from_dict` reads back.
 Parameters are in MPa (moduli), mm (thickness), 1 (lambda0); E is eq. 7 of the
 paper in µm on the concatenated fitted points.  See :mod:`skinsuction.space` for the
 ray spaces, :mod:`._stats` for the statistics, :mod:`._steps` for the steps and

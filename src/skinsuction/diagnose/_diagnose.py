@@ -21,7 +21,7 @@ from ._rule import BEYOND_SPACE, decide, eligible
 from ._settings import Settings
 from ._stats import describe_residuals
 from ._steps import (BeyondSpaceError, cause_spaces, fit_baseline, fit_candidate, fit_json,
-                     intervals_json, residual_dict, start)
+                     fitted_skin, intervals_json, residual_dict, start)
 from ._summary import summary_text
 from ._window import fit_in_window, ratio_window, widened_window
 
@@ -127,6 +127,7 @@ def _baseline_json(run, base) -> dict:
         "at_bound": base.bounds,
         "intervals": base.intervals,
         **{k: v for k, v in fit_json(fit, test).items() if k != "parameters"},
+        "skin": fitted_skin(run, fit),
     }
 
 
@@ -143,7 +144,8 @@ def _verdict(base, candidates, best, cause, verdict, ambiguous, beyond) -> dict:
                       "candidate_bic": any(map(eligible, candidates))},
         "beyond_space": beyond,
         "extended": ({"cause": best["cause"], "parameters": best["parameters"],
-                      "intervals": best["intervals"], "E_um": best["E_um"]} if best else None),
+                      "intervals": best["intervals"], "E_um": best["E_um"],
+                      "skin": best["skin"]} if best else None),
         "gain": ({"E_ratio": best["E_ratio"], "delta_bic": best["delta_bic"],
                   "holdout_ratio": best["holdout_ratio"]} if best else None),
         "runner_up": ({"cause": runner_up["cause"],

@@ -20,6 +20,7 @@ import numpy as np
 
 from skinsuction.errors import InputError
 from skinsuction.identify import IdentificationError
+from skinsuction.model import Skin
 from skinsuction.results import jsonable
 from skinsuction.space import BASELINE, GeometryOutsideSpace, spaces_at
 
@@ -30,7 +31,7 @@ from ._stats import bic, misfit_test
 from ._window import fit_in_window, ratio_window
 
 __all__ = ["BeyondSpaceError", "Run", "Baseline", "start", "fit_baseline", "cause_spaces",
-           "fit_candidate", "intervals_json", "fit_json", "residual_dict"]
+           "fit_candidate", "intervals_json", "fit_json", "residual_dict", "fitted_skin"]
 
 
 class BeyondSpaceError(InputError):
@@ -337,7 +338,33 @@ def fit_candidate(run: Run, name: str, space, base: Baseline) -> tuple:
         "at_bound": bounds,
         "fit": fit_json(f, t),
         "holdout": hold_detail,
+        "skin": fitted_skin(run, f, cause),
     }, f
+
+
+def fitted_skin(run: Run, fit, cause=None) -> dict:
+    """The skin a fit describes (:meth:`skinsuction.model.Skin.to_dict`).
+
+    Parameters
+    ----------
+    run : Run
+        Its layers (given or assumed) and the spaces' bottom.
+    fit : Fit
+        The fit: X1d, X1h, a cause's parameter, thickness offsets.
+    cause : Cause, optional
+        The cause fitted; its parameter goes on its paths (:attr:`Cause.paths`).
+
+    Returns
+    -------
+    dict
+    """
+    p = fit.parameters
+    bottom = next(iter(run.spaces.values())).spec.bottom
+    skin = Skin.two_layer(p["X1d"], p["X1h"], t_d=p.get("t_d", run.geometry.t_d),
+                          t_h=p.get("t_h", run.geometry.t_h), bottom=bottom)
+    if cause is not None:
+        skin = skin.replace({path: p[cause.symbol] for path in cause.paths})
+    return skin.to_dict()
 
 
 # --------------------------------------------------------------------- measures of a fit

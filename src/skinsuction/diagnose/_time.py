@@ -34,6 +34,7 @@ import numpy as np
 from scipy import stats
 
 from skinsuction.errors import InputError
+from skinsuction.model import Prony, Skin
 
 from ._diagnose import Settings
 from ._stats import bic
@@ -65,6 +66,14 @@ def _fit_json(fit, data, name) -> dict:
             "misfit_p": float(stats.chi2.sf(fit.chi2, dof)),
             "bic": bic(fit.chi2, fit.n_params, fit.n_points),
             "phases": _phase_table(fit, data)}
+
+
+def _skin_of(parameters, geometry, bottom) -> dict:
+    """The skin of a time fit (long-time moduli, the spectrum on both layers, if any)."""
+    spectrum = (Prony(parameters["g"], parameters["tau_s"]) if "g" in parameters
+                else Prony())
+    return Skin.two_layer(parameters["X1d"], parameters["X1h"], t_d=geometry.t_d,
+                          t_h=geometry.t_h, bottom=bottom, spectrum=spectrum).to_dict()
 
 
 def _bound_flags(rays, fd, fits, warnings) -> dict:
@@ -143,6 +152,8 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
     except IdentificationError as err:
         raise InputError(f"{data.path}: beyond the simulated space: {err}") from None
     el, ve = _fit_json(elastic, fd, "elastic"), _fit_json(visco, fd, VISCOELASTIC_CREEP)
+    for js in (el, ve):
+        js["skin"] = _skin_of(js["parameters"], prep["geometry"], prep["space"].bottom)
     delta_bic = ve["bic"] - el["bic"]
     misfit = el["misfit_p"] < settings.alpha
     named = VISCOELASTIC_CREEP if (misfit and delta_bic <= settings.delta_bic) else "none"

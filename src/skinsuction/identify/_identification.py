@@ -110,6 +110,9 @@ class Identification(_JsonView):
         Each window focusing run: X1d, X1h, E, iterations.
     warnings : list of str
         Everything the user should read, in the order found.
+    skin : dict or None
+        The fitted skin (:meth:`skinsuction.model.Skin.to_dict`): the estimate on
+        the layers and bottom the fit assumed.
     """
 
     skinsuction_version: str
@@ -129,6 +132,7 @@ class Identification(_JsonView):
     fit: dict
     runs: list
     warnings: list
+    skin: dict | None = None
 
     @property
     def x1d_mpa(self) -> float:
@@ -195,6 +199,9 @@ class TimeIdentification(_JsonView):
         (:func:`skinsuction.provenance.collect`).
     warnings : list of str
         Everything the user should read, in the order found.
+    skin : dict or None
+        The fitted skin (:meth:`skinsuction.model.Skin.to_dict`): the long-time
+        moduli and the spectrum (on both layers) on the layers the fit assumed.
     """
 
     KIND: ClassVar[str] = "time curves"
@@ -222,6 +229,7 @@ class TimeIdentification(_JsonView):
     fit: dict
     provenance: dict
     warnings: list
+    skin: dict | None = None
 
     @property
     def kind(self) -> str:

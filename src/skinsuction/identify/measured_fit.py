@@ -38,6 +38,7 @@ import numpy as np
 
 from skinsuction._files import file_sha256
 from skinsuction.errors import InputError
+from skinsuction.model import Skin
 from skinsuction.space import LoadedSpace, load_space
 
 from ._identification import Identification, write_identification
@@ -298,4 +299,6 @@ def _identification(setup: RampSetup, runs: RampRuns, settings, flags, spread, n
                "iterations": int(n)}
               for x, e, n in zip(runs_mpa, rep.E, rep.iterations)],
         warnings=setup.warnings,
+        skin=Skin.two_layer(float(est[0]), float(est[1]), t_d=setup.geometry.t_d,
+                            t_h=setup.geometry.t_h, bottom=space.bottom).to_dict(),
     )

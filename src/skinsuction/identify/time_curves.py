@@ -27,6 +27,7 @@ import numpy as np
 
 from skinsuction._files import file_sha256
 from skinsuction.errors import InputError
+from skinsuction.model import Prony, Skin
 
 from ._identification import TimeIdentification, write_identification
 from ._time_fit import (
@@ -381,6 +382,9 @@ def _time_identification(data, prep, fit, intervals, flags, settings,
         fit=fitted,
         provenance=collect(config=settings),
         warnings=prep["warnings"],
+        skin=Skin.two_layer(params["X1d"], params["X1h"], t_d=geometry.t_d, t_h=geometry.t_h,
+                            bottom=space.bottom,
+                            spectrum=Prony(params["g"], params["tau_s"])).to_dict(),
     )
 
 
