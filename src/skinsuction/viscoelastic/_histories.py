@@ -38,6 +38,18 @@ def graded_steps(length, first, growth, largest):
     """Interior points of ``[0, length]`` with steps from ``first`` growing by
     ``growth`` up to ``largest``, the last step stretched or shrunk to fit.
 
+    Parameters
+    ----------
+    length, first, largest : float
+        The span, the first step and the largest step (s).
+    growth : float
+        Factor from one step to the next (>= 1).
+
+    Returns
+    -------
+    ndarray
+        The points after 0, ``length`` last.
+
     Examples
     --------
     >>> graded_steps(1.0, 0.1, 2.0, 0.4).round(6).tolist()
@@ -56,6 +68,23 @@ def mode1_history(pressure_mbar=400.0, on_s=3.0, off_s=2.0, cycles=2, rise_s=0.0
                   first_step_s=1e-3, growth=1.25, max_step_s=0.05):
     """Mode 1: ``cycles`` of suction ``pressure_mbar`` held ``on_s``, released for
     ``off_s``; each switch a linear ramp of ``rise_s``.
+
+    Parameters
+    ----------
+    pressure_mbar : float
+        The suction of the hold (mbar).
+    on_s, off_s : float
+        Suction on and off per cycle (s), each longer than ``rise_s``.
+    cycles : int
+        How many times.
+    rise_s : float
+        Length of each switch's linear ramp (s).
+    first_step_s, growth, max_step_s : float
+        The time steps after each switch: the first, its growth, the largest.
+
+    Returns
+    -------
+    PressureHistory
 
     Examples
     --------
@@ -84,27 +113,53 @@ def mode1_history(pressure_mbar=400.0, on_s=3.0, off_s=2.0, cycles=2, rise_s=0.0
 
 
 def mode2_history(peak_mbar=500.0, rate_mbar_s=25.0, step_s=0.25, hold_s=0.0,
-                  first_step_s=1e-3, growth=1.25):
+                  first_step_s=1e-3, growth=1.25, fall_rate_mbar_s=None, cycles=1):
     """Mode 2: a ramp from 0 to ``peak_mbar`` at ``rate_mbar_s``, an optional hold,
-    and a ramp back to 0 at the same rate (ISRN Dermatology 2013: 25 mbar/s for
-    20 s). Steps of ``step_s``, graded from ``first_step_s`` after each kink.
+    and a ramp back to 0 at ``fall_rate_mbar_s`` (default: the same rate), repeated
+    ``cycles`` times back to back (ISRN Dermatology 2013: 25 mbar/s for 20 s). Steps
+    of ``step_s``, graded from ``first_step_s`` after each kink.
+
+    Parameters
+    ----------
+    peak_mbar : float
+        The largest suction (mbar).
+    rate_mbar_s : float
+        Loading rate (mbar/s).
+    step_s : float
+        Largest time step (s).
+    hold_s : float
+        Hold at the peak (s; 0: none).
+    first_step_s, growth : float
+        The first time step after each kink and its growth.
+    fall_rate_mbar_s : float, optional
+        Unloading rate (mbar/s; default ``rate_mbar_s``).
+    cycles : int
+        How many ramps up and down, back to back.
+
+    Returns
+    -------
+    PressureHistory
 
     Examples
     --------
     >>> h = mode2_history(100, 50, step_s=0.5)
     >>> float(h.times_s[-1]), float(h.pressure_mbar.max()), sorted(map(str, set(h.phase)))
     (4.0, 100.0, ['release', 'rest', 'rise'])
+    >>> h = mode2_history(100, 50, step_s=0.5, fall_rate_mbar_s=25, cycles=2)
+    >>> float(h.times_s[-1]), int((h.pressure_mbar == 100).sum())
+    (12.0, 2)
     """
-    if not (peak_mbar > 0 and rate_mbar_s > 0 and step_s > 0 and hold_s >= 0):
-        raise ParameterError("mode 2: need peak, rate and step > 0, hold >= 0")
-    ramp = peak_mbar / rate_mbar_s
+    fall_rate = rate_mbar_s if fall_rate_mbar_s is None else fall_rate_mbar_s
+    if not (peak_mbar > 0 and rate_mbar_s > 0 and fall_rate > 0 and step_s > 0
+            and hold_s >= 0 and int(cycles) == cycles >= 1):
+        raise ParameterError("mode 2: need peak, rates and step > 0, hold >= 0, cycles >= 1")
     times, pressures, phases = [0.0], [0.0], ["rest"]
-    segments = [(ramp, 0.0, peak_mbar, "rise")]
+    segments = [(peak_mbar / rate_mbar_s, 0.0, peak_mbar, "rise")]
     if hold_s > 0:
         segments.append((hold_s, peak_mbar, peak_mbar, "hold"))
-    segments.append((ramp, peak_mbar, 0.0, "release"))
+    segments.append((peak_mbar / fall_rate, peak_mbar, 0.0, "release"))
     start = 0.0
-    for length, p_from, p_to, name in segments:
+    for length, p_from, p_to, name in segments * int(cycles):
         for s in graded_steps(length, min(first_step_s, step_s), growth, step_s):
             times.append(start + s)
             pressures.append(p_from + (p_to - p_from) * s / length)
