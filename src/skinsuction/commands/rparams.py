@@ -20,7 +20,7 @@ from skinsuction._argtypes import positive
 
 from ._common import EXIT_OK, CLIError, add_measured, add_out, writing
 
-__all__ = ["HELP", "DESCRIPTION", "add_arguments", "run"]
+__all__ = ["HELP", "DESCRIPTION", "add_arguments", "run", "r_heading"]
 
 HELP = "the standard Cutometer parameters (Ue ... Ua, R0-R9) of time curves"
 
@@ -87,8 +87,7 @@ def run(args: argparse.Namespace) -> int:
     for note in data.notes:
         print(note)
     if has_r:
-        print(f"\nR parameters (mm and ratios; Ue read {args.ue_time_s:g} s after onset, Ur "
-              f"{args.ue_time_s:g} s after release; R3, R4, R9 of the measurement):")
+        print("\n" + r_heading(args.ue_time_s))
         print(_table_text(rtable))
     if ramp is not None:
         print("\nmode 2 (R0-R9 need a hold at constant suction and do not apply):")
@@ -99,6 +98,22 @@ def run(args: argparse.Namespace) -> int:
         print(f"warning: {w}", file=sys.stderr)
     print(f"wrote {', '.join(str(p) for p in written)}")
     return EXIT_OK
+
+
+def r_heading(ue_time_s: float) -> str:
+    """The line printed above the R-parameter table.
+
+    Parameters
+    ----------
+    ue_time_s : float
+        When Ue and Ur are read, s.
+
+    Returns
+    -------
+    str
+    """
+    return (f"R parameters (mm and ratios; Ue read {ue_time_s:g} s after onset, Ur "
+            f"{ue_time_s:g} s after release; R3, R4, R9 of the measurement):")
 
 
 def _tables(data, args):

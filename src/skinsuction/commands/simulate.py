@@ -1,9 +1,11 @@
-"""``skinsuction simulate``: the FE suction curve M(p) of one skin under one probe.
+"""``skinsuction simulate``: the FE suction curve of one skin under one probe, M(p) or M(t).
 
 ::
 
     skinsuction simulate --probe 6 --x1d 0.08 --x1h 4.1e-4 [--out curve.csv]
     skinsuction simulate --probe 2 --skin skin.yaml [--max-mbar 450 --step-mbar 10]
+    skinsuction simulate --probe 2 --skin skin.yaml --mode1 450,3,3,2 [--rparams]
+    skinsuction simulate --probe 2 --skin skin.yaml (--mode2 450,3,3,1 | --history p.csv)
 
 The skin is a file (``--skin``: any stack of one to four layers, see
 :class:`skinsuction.model.Skin`) or the paper's two layers from the shortcuts
@@ -12,8 +14,11 @@ The skin is a file (``--skin``: any stack of one to four layers, see
 Prints (or writes atomically with ``--out``) the apex deflection curve as CSV after
 ``#`` lines with the settings and the solver's outcome; exit code 3 if the solver
 stopped before the last pressure (the curve is still written, NaN beyond).
-Every argument is defined in :func:`add_arguments`, and :func:`curve_csv` writes
-every one of them into the ``#`` lines.
+A time protocol (``--mode1``, ``--mode2``, ``--history``; :mod:`._protocols`) runs
+the model in time with each layer's spectrum and writes ``time_s,pressure_mbar,
+deflection_mm`` sampled at ``--sample-hz``. Every argument is defined in
+:func:`add_arguments`; :func:`curve_csv` (a ramp) and
+:func:`skinsuction.commands._protocols.time_csv` write them into the ``#`` lines.
 """
 
 from __future__ import annotations
@@ -33,11 +38,12 @@ from ._common import (
     fmt,
     writing,
 )
+from ._protocols import TIME_OPTIONS, header_lines
 
 __all__ = ["HELP", "DESCRIPTION", "add_arguments", "add_skin_arguments", "run", "curve_csv",
            "skin_from_args", "PROGRESS_QUIET_S"]
 
-HELP = "FE suction curve M(p) of one skin under one probe"
+HELP = "FE suction curve of one skin under one probe: M(p), or in time (mode 1, mode 2)"
 
 DESCRIPTION = (
     "Run the axisymmetric FE model of the suction test on a skin (--skin FILE.yaml: any "
@@ -45,6 +51,9 @@ DESCRIPTION = (
     "(default 0, 2, ..., 100 mbar) and print the apex deflection curve as CSV "
     "(pressure_mbar,deflection_mm) after '#' comment lines with the settings and "
     "the solver outcome (# converged: true|false, # last_converged_mbar, # reason). "
+    "With a time protocol (--mode1, --mode2 or --history) it runs the model in time, "
+    "each layer with its relaxation spectrum, and prints time_s,pressure_mbar,"
+    "deflection_mm sampled at --sample-hz. "
     "Exit code 0 if every pressure converged, 3 if the solver stopped early "
     "(the curve is still written, NaN beyond the last converged pressure).")
 
@@ -101,6 +110,10 @@ def add_skin_arguments(p: argparse.ArgumentParser) -> None:
                         "a whole number 2..8 (default 1)")
 
 
+class _Default(float):
+    """A ramp default the user did not type: a time protocol refuses only typed ones."""
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Every argument of ``skinsuction simulate``.
 
@@ -114,10 +127,34 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     None
     """
     add_skin_arguments(p)
+    p.set_defaults(max_mbar=_Default(100.0), step_mbar=_Default(2.0))
+    g = p.add_argument_group(
+        "time protocols",
+        "instead of the ramp, at most one of these: the model in time, each layer with its "
+        "relaxation spectrum (an elastic skin follows the load quasi-statically)")
+    g.add_argument("--mode1", metavar="P,ON,OFF,CYCLES", default=None,
+                   help="Cutometer mode 1: suction P mbar held ON s, released OFF s, CYCLES "
+                        "times (each switch a 0.01 s ramp), e.g. 450,3,3,2")
+    g.add_argument("--mode2", metavar="P,RISE,FALL,CYCLES", default=None,
+                   help="Cutometer mode 2: suction rising linearly to P mbar over RISE s and "
+                        "back to 0 over FALL s, CYCLES times back to back, e.g. 450,3,3,1")
+    g.add_argument("--history", metavar="FILE", default=None,
+                   help="any suction history: a CSV with the header time_s,pressure_mbar (s, "
+                        "mbar; times increasing, suction >= 0 and 0 at the first time), "
+                        "piecewise linear between its rows")
+    g.add_argument("--sample-hz", type=positive, default=None, metavar="HZ",
+                   help="sampling rate of the time curve in Hz (default 100, as a Cutometer); "
+                        "every sample is a time step of the solver")
+    g.add_argument("--rparams", action="store_true",
+                   help="with --mode1: print the R parameters (Ue, Uv, Uf, Ur, Ua in mm, "
+                        "R0-R9 per cycle) of the simulated curve, as skinsuction rparams "
+                        "computes them (after the curve on standard output, alone when the "
+                        "curve goes to a file)")
     p.add_argument("--measured-format", action="store_true",
                    help="write the curve in the measured-CSV format (columns probe_mm, "
-                        "pressure_mbar, deflection_mm), which identify, diagnose and study "
-                        "read; the '#' lines are the same")
+                        "pressure_mbar, deflection_mm; with a time protocol probe_mm, time_s, "
+                        "pressure_mbar, deflection_mm), which identify, diagnose, study and "
+                        "rparams read; the '#' lines are the same")
     add_out(p, metavar="FILE", required=False,
             help="write the CSV to FILE (atomically) instead of standard output")
 
@@ -183,27 +220,10 @@ def curve_csv(curve, args: argparse.Namespace, skin=None) -> str:
         or with ``--measured-format`` ``probe_mm,pressure_mbar,deflection_mm`` rows of
         the converged points only.
     """
-    import json
-
-    from skinsuction import __version__
-    from skinsuction.model import ParameterError
-
     if skin is None:
         skin, _ = skin_from_args(args)
-    lines = [
-        f"# skinsuction simulate {__version__}: apex deflection M(p) of the suction test",
-        f"# probe_mm: {fmt(args.probe)}",
-    ]
-    try:  # the paper's two layers keep the header lines they always had
-        v = skin.two_layer_values()
-        lines += [f"# x1d_mpa: {fmt(v['x1d'])}", f"# x1h_mpa: {fmt(v['x1h'])}",
-                  f"# x2d_mpa: {fmt(v['x2d'])}", f"# x2h_mpa: {fmt(v['x2h'])}",
-                  f"# t_d_mm: {fmt(v['t_d'])}", f"# t_h_mm: {fmt(v['t_h'])}"]
-    except ParameterError:
-        pass
+    lines = header_lines("apex deflection M(p) of the suction test", skin, args.probe)
     lines += [
-        f"# skin: {json.dumps(skin.to_dict(), separators=(',', ':'))}",
-        f"# bottom: {skin.bottom}",
         f"# ramp_mbar: 0 to {fmt(args.max_mbar)} by {fmt(args.step_mbar)}",
         f"# refinement: {fmt(args.refinement)}",
         f"# converged: {'true' if curve.converged else 'false'}",
@@ -235,12 +255,15 @@ def run(args: argparse.Namespace) -> int:
     Returns
     -------
     int
-        0 if every pressure converged, 3 if the solver stopped early.
+        0 if every pressure (or time) converged, 3 if the solver stopped early.
     """
     from skinsuction import model
     from skinsuction._progress import Progress
 
+    protocol = _time_protocol(args)
     skin, ramp = skin_from_args(args)
+    if protocol is not None:
+        return _run_time(args, skin, protocol)
     # a fine mesh takes minutes: a bar on a terminal, a line every 10 s in a log
     bar = Progress(len(ramp.pressures_mbar) - 1, "simulate", "pressures",
                    quiet_below=PROGRESS_QUIET_S)
@@ -254,7 +277,77 @@ def run(args: argparse.Namespace) -> int:
         raise CLIError(f"the model refused the parameters: {err}") from None
     finally:
         bar.close()
-    text = curve_csv(curve, args, skin)
+    _emit(curve_csv(curve, args, skin), args)
+    if not curve.converged:
+        print(f"skinsuction simulate: warning: the solver stopped at "
+              f"{fmt(curve.last_converged_mbar)} mbar ({curve.reason}); "
+              "the curve is NaN beyond", file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    return EXIT_OK
+
+
+def _time_protocol(args):
+    """The time protocol of the options (None: the ramp), after the exclusions."""
+    from ._protocols import protocol_from_args
+
+    given = [f"--{k}" for k in TIME_OPTIONS if getattr(args, k, None) is not None]
+    if len(given) > 1:
+        raise CLIError(f"give one protocol, not {' and '.join(given)}")
+    if not given:
+        if getattr(args, "sample_hz", None) is not None:
+            raise CLIError("--sample-hz applies to a time protocol (--mode1, --mode2, "
+                           "--history), not to the ramp")
+        if getattr(args, "rparams", False):
+            raise CLIError("--rparams needs --mode1 (R0-R9 are read from cycles at a "
+                           "constant suction)")
+        return None
+    typed = [f"--{k.replace('_', '-')}" for k in ("max_mbar", "step_mbar")
+             if not isinstance(getattr(args, k), _Default)]
+    if typed:
+        raise CLIError(f"{' and '.join(typed)} set the ramp; {given[0]} sets the suction in "
+                       "time: give one protocol")
+    if args.rparams and given != ["--mode1"]:
+        raise CLIError(f"--rparams needs --mode1, not {given[0]} (R0-R9 are read from "
+                       "cycles at a constant suction)")
+    return protocol_from_args(args)
+
+
+def _run_time(args, skin, protocol) -> int:
+    """Solve a time protocol, write its curve (and print its R parameters)."""
+    from skinsuction._progress import Progress
+
+    from ._protocols import (DEFAULT_SAMPLE_HZ, rparams_text, simulate_protocol, solve_grid,
+                             time_csv)
+
+    hz = args.sample_hz or DEFAULT_SAMPLE_HZ
+    # the solver's times: the protocol's own points and every sample
+    bar = Progress(solve_grid(protocol)[0].size - 1, "simulate", "time steps",
+                   quiet_below=PROGRESS_QUIET_S)
+    try:
+        result = simulate_protocol(skin, args.probe, protocol, args.refinement,
+                                   lambda k, n, t: bar.step(note=f"{t:g} s"))
+    finally:
+        bar.close()
+    history = result[0]
+
+    def text(measured):
+        return time_csv(skin, args.probe, protocol, result, args.refinement, hz, measured)
+
+    _emit(text(args.measured_format), args)
+    if not history.converged:
+        reached = history.times_s[history.deflection_mm == history.deflection_mm][-1]
+        print(f"skinsuction simulate: warning: the solver stopped at {reached:g} s "
+              f"({history.reason}); the curve is NaN beyond"
+              + ("; no R parameters" if args.rparams else ""), file=sys.stderr)
+        return EXIT_NOT_CONVERGED
+    if args.rparams:
+        sys.stdout.write(("\n" if not args.out else "") + rparams_text(text(True)))
+        sys.stdout.flush()
+    return EXIT_OK
+
+
+def _emit(text: str, args) -> None:
+    """Write the CSV to ``--out`` (atomically) or standard output."""
     if args.out:
         from skinsuction._files import atomic_output
 
@@ -263,9 +356,3 @@ def run(args: argparse.Namespace) -> int:
     else:
         sys.stdout.write(text)
         sys.stdout.flush()
-    if not curve.converged:
-        print(f"skinsuction simulate: warning: the solver stopped at "
-              f"{fmt(curve.last_converged_mbar)} mbar ({curve.reason}); "
-              "the curve is NaN beyond", file=sys.stderr)
-        return EXIT_NOT_CONVERGED
-    return EXIT_OK
