@@ -353,6 +353,47 @@ if "diagnosis" in config:
             script:
                 "../scripts/detectability_map.py"
 
+    if "published_ranges" in DG:
+        DIAGNOSIS_OUTPUTS += [
+            "results/figures/published_ranges.png",
+            "results/tables/published_ranges.md",
+        ]
+
+        rule published_ranges:
+            """Which skins reach the published Cutometer values of the face: FE mode-1
+            curves of creep alone and of creep with a stiffening dermis."""
+            output:
+                draws="results/tables/published_ranges.csv",
+                summary=report(
+                    "results/tables/published_ranges.md",
+                    caption="../report/published_ranges.rst",
+                    category="Diagnosis",
+                    labels={"table": "published Cutometer ranges"},
+                ),
+                png=report(
+                    "results/figures/published_ranges.png",
+                    caption="../report/published_ranges.rst",
+                    category="Diagnosis",
+                    labels={"figure": "published Cutometer ranges"},
+                ),
+                pdf="results/figures/published_ranges.pdf",
+            log:
+                "logs/diagnosis/published_ranges.log",
+            benchmark:
+                "results/benchmarks/diagnosis/published_ranges.tsv"
+            params:
+                settings=DG["published_ranges"],
+                mesh=config.get("mesh", {}),
+                code=code_hash("evaluation", "viscoelastic", "model", "measured", "figures"),
+            threads: 2
+            resources:
+                mem_mb=3000,
+                runtime=60,
+            conda:
+                "../envs/skinsuction.yaml"
+            script:
+                "../scripts/published_ranges.py"
+
     if "confusion_given_layers" in DG:
         # Opt-in (not in the default target): every draw has its own dermis, and every
         # candidate cause's rays are solved on demand at it and at +-1 sd of it (cut to

@@ -15,6 +15,8 @@ is known, and neither of them imports it (tests/test_layers.py):
   parameters a diagnosis identified (:func:`fe_check`, Figure 6);
 * the classical optimisers the window focusing is compared with
   (:func:`least_squares_from_random_starts`, :func:`differential_evolution_fit`);
+* which skins reach the published Cutometer values of the face, creep alone or
+  creep with stiffening (:func:`published_ranges_study`);
 * the shipped synthetic example, remade with ``python -m skinsuction.evaluation.example``
   (:mod:`skinsuction.evaluation.example`, not imported here).
 
@@ -48,8 +50,24 @@ from ._confusion import (
     run_draw,
     run_draws,
 )
+from ._published import (
+    FACE_PROTOCOL,
+    PUBLISHED_FACE,
+    box_distance,
+    closest_skin,
+    evaluate_draw,
+    published_ranges_markdown,
+    published_ranges_study,
+    published_ranges_summary,
+)
 from ._rates import UNDIAGNOSED, attribution_ceiling, summarise, under_rule
-from ._time_virtual import mode1_suction, mode2_suction, virtual_curve, write_time_csv
+from ._time_virtual import (
+    mode1_suction,
+    mode2_suction,
+    virtual_curve,
+    virtual_skin_curve,
+    write_time_csv,
+)
 from ._virtual import (
     DETECTABLE_EFFECTS,
     DRAW_RANGES,
@@ -63,7 +81,10 @@ __all__ = [
     # virtual experiments
     "VirtualExperiment", "virtual_experiment", "draw_experiment", "write_csv",
     "DRAW_RANGES", "DETECTABLE_EFFECTS",
-    "mode1_suction", "mode2_suction", "virtual_curve", "write_time_csv",
+    "mode1_suction", "mode2_suction", "virtual_curve", "virtual_skin_curve", "write_time_csv",
+    # the published Cutometer values: creep alone, or with stiffening
+    "PUBLISHED_FACE", "FACE_PROTOCOL", "box_distance", "evaluate_draw", "closest_skin",
+    "published_ranges_study", "published_ranges_summary", "published_ranges_markdown",
     # the diagnosis over the physiological domain
     "WIDE_DOMAIN", "draw_wide", "domain_from_config", "given_keywords", "initial_stress_kpa",
     "run_draw", "run_draws",
