@@ -41,6 +41,7 @@ def _file(tmp_path, g, tau, name, x1d=0.1, ratio=0.05):
 def test_creep_is_named_with_its_spectrum_and_gain(space, tmp_path):
     r = diagnose_time_data(_file(tmp_path, 0.4, 0.3, "creep.csv"), space, FAST)
     assert r["named"] == VISCOELASTIC_CREEP and r["verdict"] == "cause_found"
+    assert r["effects"] == [VISCOELASTIC_CREEP] and r["final"]["model"] == VISCOELASTIC_CREEP
     p = r["viscoelastic"]["parameters"]
     assert abs(p["g"][0] / 0.4 - 1) < 0.1 and abs(p["tau_s"][0] / 0.3 - 1) < 0.1
     assert abs(p["X1d"] / 0.1 - 1) < 0.03
@@ -56,7 +57,8 @@ def test_creep_is_named_with_its_spectrum_and_gain(space, tmp_path):
 def test_an_elastic_skin_is_not_called_viscoelastic(space, tmp_path):
     # g = 1e-4: the deflection moves by 1e-4 of itself, 0.05 µm, far below the 0.01 mm steps
     r = diagnose_time_data(_file(tmp_path, 1e-4, 0.3, "elastic.csv"), space, FAST)
-    assert r["named"] == "none", r["summary"]
+    assert r["named"] == "none" and r["effects"] == [], r["summary"]
+    assert r["verdict"] == "neo_hookean_fits"
     assert r["elastic"]["misfit_p"] > 0.01
     assert abs(r["elastic"]["parameters"]["X1d"] / 0.1 - 1) < 0.03
 

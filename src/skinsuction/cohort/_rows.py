@@ -28,7 +28,7 @@ RESULT_COLUMNS = (
     "x1h_mpa", "x1h_lower_mpa", "x1h_upper_mpa", "x1h_lower_open", "x1h_upper_open",
     "e_dermis_kpa", "e_dermis_lower_kpa", "e_dermis_upper_kpa", "correlation_x1d_x1h",
     "E_um", "noise_um", "noise_method", "misfit_scale", "at_bound",
-    "systematic_misfit", "misfit_p_value", "cause", "verdict", "ambiguous_with",
+    "systematic_misfit", "misfit_p_value", "cause", "effects", "verdict", "ambiguous_with",
     "extra_parameter", "extra_unit", "extra_value", "extra_lower", "extra_upper",
     "gain_E_ratio", "delta_bic",
     # time curves: the spectrum, the instantaneous moduli, the R parameters (mean over the
@@ -153,7 +153,8 @@ def _diagnosis_columns(d: dict) -> dict:
     base = d["baseline"]
     out = {"systematic_misfit": bool(base["systematic_misfit"]),
            "misfit_p_value": base["misfit_test"]["p_value"],
-           "cause": d["cause"], "verdict": d["verdict"],
+           "cause": d["cause"], "effects": ",".join(d.get("effects") or []),
+           "verdict": d["verdict"],
            "ambiguous_with": ",".join(d.get("ambiguous_with") or [])}
     chosen = next((c for c in d["candidates"] if c["cause"] == d["cause"]), None)
     if chosen is not None:
@@ -250,14 +251,33 @@ def _analyse_time(row, entry, ctx, seed, t0):
 
         try:
             diag = diagnose_time_data(data, ctx["space"], _seeded(ctx["settings"], seed))
-            row.update({"systematic_misfit": bool(diag["decision"]["elastic_misfits"]),
-                        "misfit_p_value": diag["elastic"]["misfit_p"],
-                        "cause": diag["named"], "verdict": diag["verdict"],
-                        "delta_bic": diag["gain"]["delta_bic"]})
+            row.update(_time_diagnosis_columns(diag))
         except ValueError as err:
             warnings.append(f"diagnosis failed: {' '.join(str(err).split())}")
     return _finish(row, warnings, t0, ctx, ident, diag, write_time_identification,
                    _write_time_report)
+
+
+def _time_diagnosis_columns(diag: dict) -> dict:
+    """The diagnosis's columns of a time curve: misfit, the effects, the elastic
+    effect's parameter (the final model's, with its interval), the gain."""
+    out = {"systematic_misfit": bool(diag["decision"]["elastic_misfits"]),
+           "misfit_p_value": diag["elastic"]["misfit_p"],
+           "cause": diag["named"], "effects": ",".join(diag.get("effects") or []),
+           "verdict": diag["verdict"],
+           "ambiguous_with": ",".join(diag.get("ambiguous_with") or []),
+           "delta_bic": diag["gain"]["delta_bic"]}
+    final = diag.get("final") or {}
+    for name in diag.get("effects") or []:
+        if name == "viscoelastic_creep":  # its spectrum has columns of its own
+            continue
+        cause = (diag.get("causes") or {}).get(name) or {}
+        symbol = (cause.get("parameters") or [None])[0]
+        if symbol in (final.get("parameters") or {}):
+            ci = (final.get("intervals") or {}).get(symbol) or {}
+            out.update({"extra_parameter": symbol, "extra_value": final["parameters"][symbol],
+                        "extra_lower": ci.get("lower"), "extra_upper": ci.get("upper")})
+    return out
 
 
 def _write_time_report(diag, out_dir):

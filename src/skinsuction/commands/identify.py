@@ -89,6 +89,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                       "curves, fit only this probe's curves")
     p.add_argument("--terms", type=int, choices=(1, 2), default=1,
                    help="time curves: Prony terms of the relaxation spectrum (default 1)")
+    p.add_argument("--effect", metavar="CAUSE", default=None,
+                   help="time curves: an elastic effect fitted with the spectrum, e.g. "
+                        "strain_stiffening (X2d identified too; `diagnose` chooses the "
+                        "effects itself)")
     p.add_argument("--phases", choices=("all", "on"), default="all",
                    help="time curves: fit every point, with the fast path's model error per "
                         "phase in the likelihood (all, default), or only while the suction "
@@ -225,7 +229,7 @@ def _run_time(args: argparse.Namespace, data) -> int:
         probes=None if args.probe is None else [args.probe], curve=args.curve,
         repeats=repeats, seed=args.seed, noise_um=args.noise_um, level=args.level,
         phases=args.phases, thickness=thickness_from_args(args),
-        solve_on_demand=not args.no_solve, workers=args.workers)
+        solve_on_demand=not args.no_solve, workers=args.workers, effect=args.effect)
     with writing(args.out):
         paths = write_identification(result, args.out)
     _print_time(result)
@@ -252,6 +256,11 @@ def _print_time(result) -> None:
     print(f"X1d = {result.X1d:.4g} MPa {interval_text(iv['X1d'])}, X1h = "
           f"{result.X1h:.4g} MPa {interval_text(iv['X1h'])} (long-time; "
           f"{100 * iv['level']:g} % intervals, {iv['method'].split(' in ')[0]})")
+    effect = result.model.get("effect")
+    if effect is not None:
+        symbol = next(k for k in result.model if k not in ("name", "convention", "terms",
+                                                          "effect"))
+        print(f"{effect}: {symbol} = {result.model[symbol]:.4g} {interval_text(iv[symbol])}")
     print(f"spectrum: {spectrum}; instantaneous X1d = {result.X1d_instantaneous:.4g} MPa, "
           f"X1h = {result.X1h_instantaneous:.4g} MPa")
     for c in result.fit_quality["curves"]:

@@ -137,6 +137,8 @@ def _verdict(base, candidates, best, cause, verdict, ambiguous, beyond) -> dict:
     runner_up = next((c for c in ranked if best is not None and c is not best), None)
     return {
         "cause": cause,
+        # the effects named, in the order added: a ramp names one cause at most
+        "effects": [cause] if verdict == "cause_found" else [],
         "verdict": verdict,
         # which test saw the effect: the generic smooth-pattern test of the neo-Hookean
         # residuals, and/or a candidate's own BIC (decisive and removing the misfit)

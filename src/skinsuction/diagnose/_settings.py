@@ -66,6 +66,9 @@ class Settings:
         removes the misfit is a detection of its own (its likelihood-ratio test of one
         extra parameter is the more powerful near the noise); the pattern test then
         only tells ``unexplained_misfit`` from ``neo_hookean_fits``.
+    time_causes : list of str or None
+        The elastic causes a time-curve diagnosis tries beside creep (their rays
+        beside the scale-free space); None: every one there.
     """
 
     alpha: float = 0.01
@@ -83,6 +86,7 @@ class Settings:
     space_error: bool = True
     cause_window_decades: float | None = 1.0
     pattern_gate: bool = False
+    time_causes: tuple | None = None
 
     def __post_init__(self):
         if not 0 < self.alpha < 1:
@@ -101,6 +105,10 @@ class Settings:
             raise ValueError(f"level must lie in [0.5, 1), got {self.level}")
         if not isinstance(self.pattern_gate, bool):
             raise ValueError(f"pattern_gate must be true or false, got {self.pattern_gate!r}")
+        if self.time_causes is not None and (isinstance(self.time_causes, str) or not all(
+                isinstance(c, str) for c in self.time_causes)):
+            raise ValueError(f"time_causes must be a list of cause names or None, got "
+                             f"{self.time_causes!r}")
         if self.cause_window_decades is not None and not self.cause_window_decades > 0:
             raise ValueError("cause_window_decades must be positive or None, got "
                              f"{self.cause_window_decades}")

@@ -68,141 +68,270 @@ def _fit_json(fit, data, name) -> dict:
             "phases": _phase_table(fit, data)}
 
 
-def _skin_of(parameters, geometry, bottom) -> dict:
-    """The skin of a time fit (long-time moduli, the spectrum on both layers, if any)."""
-    spectrum = (Prony(parameters["g"], parameters["tau_s"]) if "g" in parameters
+def _skin_of(parameters, geometry, bottom, cause=None) -> dict:
+    """The skin of a time fit (long-time moduli, the spectrum on both layers if any,
+    the elastic cause's parameter if any)."""
+    spectrum = (Prony(parameters["g"], parameters["tau_s"]) if parameters.get("g")
                 else Prony())
-    return Skin.two_layer(parameters["X1d"], parameters["X1h"], t_d=geometry.t_d,
-                          t_h=geometry.t_h, bottom=bottom, spectrum=spectrum).to_dict()
+    skin = Skin.two_layer(parameters["X1d"], parameters["X1h"], t_d=geometry.t_d,
+                          t_h=geometry.t_h, bottom=bottom, spectrum=spectrum)
+    if cause is not None:
+        skin = skin.replace({path: parameters[cause.symbol] for path in cause.paths})
+    return skin.to_dict()
 
 
-def _bound_flags(rays, fd, fits, warnings) -> dict:
-    """Each fit's at-bound flags (stored in its JSON), a loud warning for each."""
+def _bound_flags(fd, models, warnings) -> dict:
+    """Each model's at-bound flags (stored in its JSON), a loud warning for each."""
     from skinsuction.identify import time_bound_flags
 
     keys = [("scale_free_space.load.max (the largest suction over load.max sets the lowest "
              "X1d)", "scale_free_space.x1d_mpa.max"),
             ("scale_free_space.ratio", "scale_free_space.ratio")]
     at_bound = {}
-    for label, fit, js in fits:
-        flags = time_bound_flags(rays, fd, fit, keys)
+    for label, m, js in models:
+        flags = time_bound_flags(m.rays, fd, m.fit, keys)
         js["at_bound"] = flags
         for name, fl in flags.items():
-            if fl["at_bound"]:
+            if fl["at_bound"] and not fl.get("neutral"):
                 at_bound.setdefault(label, []).append(name)
                 warnings.append(f"AT BOUND: the {label} fit's {name} sits at the {fl['side']} "
-                                f"edge of the {'space' if name in ('X1d', 'X1h') else 'spectrum'}"
+                                f"edge of the {'spectrum' if name[:2] in ('g_', 'ta') else 'space'}"
                                 f" ({fl['edge']}): widen {fl['config_key']}; its value is "
                                 "a bound, not an estimate")
     return at_bound
 
 
-def _gain(el, ve, delta_bic) -> dict:
-    """What creep gains: BIC, chi^2 and the RMS of each phase of each curve."""
-    gain = {"delta_bic": float(delta_bic), "delta_chi2": float(ve["chi2"] - el["chi2"]),
+def _gain(el, ve, fin) -> dict:
+    """What the final model gains over the elastic one (BIC, chi^2), and the RMS of
+    each phase of each curve: elastic, creep alone, final model."""
+    gain = {"delta_bic": float(fin["bic"] - el["bic"]),
+            "delta_chi2": float(fin["chi2"] - el["chi2"]), "model": fin["model"],
             "rms_um": {}}
-    for a, b in zip(el["phases"], ve["phases"]):
+    for a, b, c in zip(el["phases"], ve["phases"], fin["phases"]):
         gain["rms_um"][a["curve"]] = {ph: {"elastic": a["phases"][ph]["rms_um"],
-                                           "viscoelastic": b["phases"][ph]["rms_um"]}
+                                           "viscoelastic": b["phases"][ph]["rms_um"],
+                                           "final": c["phases"][ph]["rms_um"]}
                                       for ph in a["phases"]}
     return gain
+
+
+def _misfit_left(model, fd, settings) -> list:
+    """Words for the misfit the final model leaves: the phases whose chi^2 per point
+    exceeds its 1 - alpha quantile, with their RMS (µm)."""
+    if model.misfit_p >= settings.alpha:
+        return []
+    out = []
+    for d, res, pc in zip(fd, model.fit.residual_um, model.fit.phase_chi2):
+        bad = []
+        for ph, (chi2, n) in pc.items():
+            if n and stats.chi2.sf(chi2, n) < settings.alpha:
+                sel = (d.phase == ph) & d.used
+                bad.append(f"{ph} (RMS {float(np.sqrt(np.mean(res[sel] ** 2))):.1f} µm, "
+                           f"chi^2/n {chi2 / n:.2g})")
+        if bad:
+            out.append(f"{d.label}: the final model {model.name} still misses "
+                       + ", ".join(bad))
+    return out
+
+
+def _causes_tried(space, settings, thickness_given) -> list:
+    """The elastic causes a time diagnosis tries (Settings.time_causes, else all)."""
+    names = space.cause_names()
+    wanted = names if settings.time_causes is None else list(settings.time_causes)
+    unknown = [c for c in wanted if c not in names]
+    if unknown:
+        raise InputError(f"time_causes: no rays for {', '.join(unknown)} beside the space "
+                         f"(causes: {', '.join(names) or 'none'})")
+    return wanted
+
+
+def _model_json(m, fd, prep, settings, rays_cause) -> dict:
+    from skinsuction.identify import laplace_intervals
+
+    js = _fit_json(m.fit, fd, m.name)
+    js["effects"] = list(m.effects)
+    js["skin"] = _skin_of(js["parameters"], prep["geometry"], prep["space"].bottom, rays_cause)
+    js["intervals"] = laplace_intervals(m.rays, fd, m.fit, level=settings.level)
+    return js
 
 
 def diagnose_time_data(data, space, settings: Settings | None = None, *, thickness=None,
                        probes=None, curve=None) -> dict:
     """Diagnose loaded time curves (:class:`skinsuction.measured.MeasuredTimeData`).
 
+    The model is built effect by effect (:func:`._time_effects.select_effects`):
+    creep and each elastic cause of the space, added while decisive, each checked
+    against the final model.
+
     Parameters
     ----------
     data : MeasuredTimeData
     space : LoadedSpace
-        The scale-free space (:func:`skinsuction.space.load_space`).
+        The scale-free space (:func:`skinsuction.space.load_space`); its causes'
+        rays beside it give the elastic effects.
     settings : Settings
-        ``alpha``, ``delta_bic``, ``repeats``, ``seed``, ``noise_um``, ``level`` are used.
+        ``alpha``, ``delta_bic``, ``ambiguity_bic``, ``repeats``, ``seed``,
+        ``noise_um``, ``level``, ``time_causes`` are used.
     thickness : dict, optional
         Layer thicknesses overriding the file's header.
 
     Returns
     -------
     dict
-        JSON-able: ``verdict`` (``cause_found`` or ``neo_hookean_fits``), ``named``
-        (``viscoelastic_creep`` or ``none``), ``elastic`` and ``viscoelastic`` fits
-        (parameters, chi^2, BIC, misfit p, chi^2 and RMS per phase), ``gain``,
-        ``intervals`` of the viscoelastic fit, ``summary``, ``warnings``,
-        ``geometry``, ``input``.
+        JSON-able: ``effects`` (the effects named, in the order added; [] for
+        none), ``cause`` and ``named`` (the first of them, or ``none``),
+        ``verdict`` (``cause_found``, ``neo_hookean_fits``, ``unexplained_misfit``: the
+        elastic model misfits and no effect earns its place, or ``beyond_space``: the
+        model it stands on sits at an edge of the space), ``steps`` (each
+        step's options, effect added and ties), ``removed``, ``final`` (its fit,
+        intervals and skin), ``elastic`` and ``viscoelastic`` fits (parameters,
+        chi^2, BIC, misfit p, chi^2 and RMS per phase), ``gain`` (of the final
+        model over the elastic one), ``intervals`` of the viscoelastic fit,
+        ``patterns`` (what no model explains, in words), ``summary``,
+        ``warnings``, ``geometry``, ``input``.
     """
     from skinsuction import __version__
-    from skinsuction.identify import IdentificationError
-    from skinsuction.identify import fit_time_model, laplace_intervals
+    from skinsuction.identify import IdentificationError, laplace_intervals
     from skinsuction.identify.time_curves import prepare_time_fit
     from skinsuction.provenance import collect
+
+    from ._time_effects import (CREEP_SECOND_TERM, EffectFitter, cycle_pattern,
+                                physical_effects, select_effects)
 
     settings = settings or Settings()
     prep = prepare_time_fit(data, space, probes=probes, curve=curve,
                             noise_um=settings.noise_um, thickness=thickness)
-    rays, fd, warnings = prep["rays"], prep["data"], list(prep["warnings"])
-    root = np.random.SeedSequence(int(settings.seed))
-    s_el, s_ve = root.spawn(2)
+    fd, warnings = prep["data"], list(prep["warnings"])
     try:
-        elastic = fit_time_model(rays, fd, terms=0, seed=s_el, repeats=settings.repeats)
-        # the elastic moduli with a mild spectrum start the viscoelastic polish: nested
-        start = np.concatenate([elastic.theta, [math.log10(0.3), math.log10(0.5)]])
-        visco = fit_time_model(rays, fd, terms=1, seed=s_ve, repeats=settings.repeats,
-                               starts=[start])
+        fitter = EffectFitter(prep, settings, _causes_tried(prep["space"], settings, thickness))
+        sel = select_effects(fitter, settings)
+        visco = fitter.fit((VISCOELASTIC_CREEP,))
     except IdentificationError as err:
         raise InputError(f"{data.path}: beyond the simulated space: {err}") from None
-    el, ve = _fit_json(elastic, fd, "elastic"), _fit_json(visco, fd, VISCOELASTIC_CREEP)
+    base, final = sel["base"], sel["final"]
+    el, ve = _fit_json(base.fit, fd, "elastic"), _fit_json(visco.fit, fd, VISCOELASTIC_CREEP)
     for js in (el, ve):
         js["skin"] = _skin_of(js["parameters"], prep["geometry"], prep["space"].bottom)
-    delta_bic = ve["bic"] - el["bic"]
+    cause_of = {None: None, **{n: fitter.rays[n][fitter.probes[0]].cause
+                               for n in fitter.causes}}
+    fin = _model_json(final, fd, prep, settings, cause_of[final.elastic_cause])
+    effects = physical_effects(final.effects)
+    named = effects[0] if effects else "none"
     misfit = el["misfit_p"] < settings.alpha
-    named = VISCOELASTIC_CREEP if (misfit and delta_bic <= settings.delta_bic) else "none"
-    verdict = "cause_found" if named != "none" else "neo_hookean_fits"
-    intervals = laplace_intervals(rays, fd, visco, level=settings.level)
-    at_bound = _bound_flags(rays, fd, (("elastic", elastic, el),
-                                        ("viscoelastic", visco, ve)), warnings)
-    if named != "none" and ve["misfit_p"] < settings.alpha:
-        warnings.append(f"the viscoelastic fit still misfits (chi^2 {ve['chi2']:.4g} on "
-                        f"{ve['points']} points, p = {ve['misfit_p']:.2g}): creep explains "
-                        "part of the misfit, not all of it")
-    if named == "none" and misfit:
-        warnings.append(f"the elastic fit misfits (p = {el['misfit_p']:.2g}) but creep does "
-                        f"not earn its two parameters (BIC {delta_bic:+.1f} > "
+    verdict = ("cause_found" if effects else
+               "unexplained_misfit" if misfit else "neo_hookean_fits")
+    intervals = laplace_intervals(visco.rays, fd, visco.fit, level=settings.level)
+    at_bound = _bound_flags(fd, (("elastic", base, el), ("viscoelastic", visco, ve))
+                            + ((("final", final, fin),) if effects else ()), warnings)
+    # never a silent bound: the model the verdict stands on must not sit at an edge
+    standing = "final" if effects else "elastic"
+    beyond = [{"model": (final if effects else base).name, "parameter": name}
+              for name in at_bound.get(standing, [])]
+    if beyond:
+        verdict = "beyond_space"
+        warnings.append(f"BEYOND SPACE: the {standing} model sits at an edge of the space or "
+                        f"the spectrum ({', '.join(b['parameter'] for b in beyond)}): its "
+                        "effects and parameters are those of the nearest simulated skin, not "
+                        "an estimate; widen the space where the warnings say")
+    patterns = cycle_pattern(fd, final.fit.fitted_mm) + _misfit_left(final, fd, settings)
+    if effects and fin["misfit_p"] < settings.alpha:
+        warnings.append(f"the final model {final.name} still misfits (chi^2 {fin['chi2']:.4g} "
+                        f"on {fin['points']} points, p = {fin['misfit_p']:.2g}): its effects "
+                        "explain part of the misfit, not all of it")
+    if not effects and misfit:
+        warnings.append(f"the elastic fit misfits (p = {el['misfit_p']:.2g}) but no effect "
+                        f"earns its parameters (best BIC "
+                        f"{min(o['delta_bic'] for o in sel['steps'][0]['options']):+.1f} > "
                         f"{settings.delta_bic:g}): unexplained misfit")
-    gain = _gain(el, ve, delta_bic)
+    warnings += [f"pattern: {p}" for p in patterns]
+    steps = _steps_json(sel, fitter, fd, prep, settings, cause_of)
+    chain = [m.name for m in sel["chain"]]
+    fitted_models = {m.name: m for m in sel["chain"]}
+    fitted_models[visco.name] = visco
     report = {
         "kind": "time curves",
         "skinsuction_version": __version__,
         "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "verdict": verdict, "named": named,
+        "verdict": verdict, "named": named, "cause": named, "effects": effects,
+        "creep_terms": final.terms,
         "causes": {VISCOELASTIC_CREEP: {"hypothesis": HYPOTHESIS,
-                                        "parameters": ["g", "tau_s"]}},
-        "elastic": el, "viscoelastic": ve, "gain": gain,
+                                        "parameters": ["g", "tau_s"]},
+                   CREEP_SECOND_TERM: {"hypothesis": "the spectrum has two terms (a fast "
+                                       "and a slow creep), a refinement of creep",
+                                       "parameters": ["g_2", "tau_2"]},
+                   **{n: {"hypothesis": c.hypothesis, "parameters": [c.symbol]}
+                      for n, c in cause_of.items() if n is not None}},
+        "steps": steps, "removed": sel["removed"], "chain": chain, "final": fin,
+        "ambiguous_with": sorted({e for s in steps for e in s["ambiguous_with"]}),
+        "elastic": el, "viscoelastic": ve,
+        "gain": _gain(el, ve, fin if effects else ve),
         "intervals": intervals,
+        "patterns": patterns,
         "decision": {"alpha": settings.alpha, "delta_bic": settings.delta_bic,
-                     "elastic_misfits": bool(misfit)},
-        "at_bound": at_bound,
+                     "ambiguity_bic": settings.ambiguity_bic, "elastic_misfits": bool(misfit),
+                     "causes_tried": fitter.causes},
+        "at_bound": at_bound, "beyond_space": beyond,
         "geometry": {**prep["geometry"].to_dict(),
-                     "notes": prep["space"].notes(sorted(rays))},
+                     "notes": prep["space"].notes(sorted(prep["rays"])) + fitter.notes},
         "input": {"path": str(data.path),
                   "curves": {c.label: {"protocol": c.protocol, "samples": len(c)}
                              for c in prep["curves"]}},
         "provenance": collect(config={"alpha": settings.alpha,
                                       "delta_bic": settings.delta_bic,
+                                      "ambiguity_bic": settings.ambiguity_bic,
+                                      "time_causes": fitter.causes,
                                       "repeats": settings.repeats, "seed": settings.seed}),
         "warnings": warnings,
         "fit": {d.label: {"time_s": d.time_s.tolist(),
                           "measured_mm": d.deflection_mm.tolist(),
                           "elastic_mm": np.asarray(m0, float).tolist(),
-                          "viscoelastic_mm": np.asarray(m1, float).tolist()}
-                for d, m0, m1 in zip(fd, elastic.fitted_mm, visco.fitted_mm)},
+                          "viscoelastic_mm": np.asarray(m1, float).tolist(),
+                          "models": {name: np.asarray(m.fit.fitted_mm[k], float).tolist()
+                                     for name, m in fitted_models.items()}}
+                for k, (d, m0, m1) in enumerate(zip(fd, base.fit.fitted_mm,
+                                                    visco.fit.fitted_mm))},
     }
     report["summary"] = time_summary_text(report)
     return report
 
 
+def _steps_json(sel, fitter, fd, prep, settings, cause_of) -> list:
+    """The steps of the selection, each added effect with its model's parameters and
+    intervals."""
+    out = []
+    chain = sel["chain"]
+    for k, step in enumerate(sel["steps"]):
+        rec = dict(step)
+        if step["added"] is not None:
+            m = chain[k + 1]
+            js = _model_json(m, fd, prep, settings, cause_of[m.elastic_cause])
+            rec["model"] = {key: js[key] for key in ("model", "effects", "parameters",
+                                                       "intervals", "chi2", "bic",
+                                                       "reduced_chi2", "misfit_p", "skin")}
+        out.append(rec)
+    return out
+
+
+def _params_text(params: dict, intervals: dict | None = None) -> str:
+    """``X1d = 0.05 [0.048, 0.052] MPa, ...`` of a fit."""
+    out = []
+    keys = [k for k in params if not k.endswith("instantaneous") and k not in ("g", "tau_s")]
+    iv = intervals or {}
+    for k in keys:
+        v = params[k]
+        r = iv.get(k) if isinstance(iv.get(k), dict) else None
+        out.append(f"{k} = {v:.4g}" + (f" [{r['lower']:.3g}, {r['upper']:.3g}]" if r else ""))
+    for i, (g, tau) in enumerate(zip(params.get("g") or [], params.get("tau_s") or []), 1):
+        rg, rt = iv.get(f"g_{i}"), iv.get(f"tau_{i}")
+        out.append(f"g = {g:.3g}" + (f" [{rg['lower']:.3g}, {rg['upper']:.3g}]" if rg else "")
+                   + f", tau = {tau:.3g} s"
+                   + (f" [{rt['lower']:.3g}, {rt['upper']:.3g}]" if rt else ""))
+    return ", ".join(out)
+
+
 def time_summary_text(report: dict) -> str:
-    """A few lines for the terminal and report.md."""
+    """A few lines for the terminal and report.md: the elastic fit, each step of the
+    model, the effects named."""
     el, ve = report["elastic"], report["viscoelastic"]
     p = ve["parameters"]
     lines = []
@@ -212,19 +341,48 @@ def time_summary_text(report: dict) -> str:
     lines.append(f"Elastic fit: X1d = {el['parameters']['X1d']:.4g} MPa, X1h = "
                  f"{el['parameters']['X1h']:.4g} MPa, chi^2/dof = {el['reduced_chi2']:.3g} "
                  f"(misfit p = {el['misfit_p']:.2g}).")
-    lines.append(f"Viscoelastic fit: X1d = {p['X1d']:.4g} MPa, X1h = {p['X1h']:.4g} MPa "
+    lines.append(f"Creep alone: X1d = {p['X1d']:.4g} MPa, X1h = {p['X1h']:.4g} MPa "
                  f"(long-time), g = {p['g'][0]:.3g}, tau = {p['tau_s'][0]:.3g} s, chi^2/dof = "
-                 f"{ve['reduced_chi2']:.3g}; BIC {report['gain']['delta_bic']:+.1f}.")
+                 f"{ve['reduced_chi2']:.3g}; BIC {ve['bic'] - el['bic']:+.1f}.")
+    for step in report.get("steps", []):
+        if step["added"] is None:
+            best = min(step["options"], key=lambda o: o["bic"])
+            lines.append(f"Step {step['step']}: nothing added (best {best['model']}: BIC "
+                         f"{best['delta_bic']:+.1f} against {step['from']}"
+                         + (", which does not misfit" if step["from_misfit_p"] >= report[
+                             "decision"]["alpha"] else "") + ").")
+            continue
+        opt = next(o for o in step["options"] if o["effects"][-1] == step["added"])
+        m = step["model"]
+        tie = (f"; tied with {', '.join(step['ambiguous_with'])}" if step["ambiguous_with"]
+               else "")
+        lines.append(f"Step {step['step']}: + {step['added']} (chi^2 {opt['delta_chi2']:+.1f}, "
+                     f"BIC {opt['delta_bic']:+.1f}{tie}): "
+                     f"{_params_text(m['parameters'], m['intervals'])}.")
+    for r in report.get("removed", []):
+        lines.append(f"Removed {r['effect']}: it no longer earns its place in the final model "
+                     f"(BIC {r['delta_bic_without']:+.1f} without it).")
     for label, names in (report.get("at_bound") or {}).items():
         lines.append(f"AT BOUND: the {label} fit's {', '.join(names)} at an edge of the space "
                      "or the spectrum (see the warnings): a bound, not an estimate.")
-    if report["named"] == "none":
-        lines.append("cause none: the elastic model explains the time curves (no creep "
+    effects = report.get("effects", [])
+    if not effects:
+        lines.append("cause none: the elastic model explains the time curves (no effect "
                      "beyond the noise)" if not report["decision"]["elastic_misfits"] else
-                     "cause none: the elastic model misfits, but creep does not explain it")
+                     "cause none: the elastic model misfits, but no effect explains it")
     else:
-        lines.append(f"cause {VISCOELASTIC_CREEP}: the skin creeps; the elastic model misses "
-                     "it and a relaxation spectrum fits")
+        fin = report["final"]
+        lines.append(f"effects {', '.join(effects)}: final model chi^2/dof = "
+                     f"{fin['reduced_chi2']:.3g} (misfit p = {fin['misfit_p']:.2g})")
+        if effects == [VISCOELASTIC_CREEP]:
+            lines.append(f"cause {VISCOELASTIC_CREEP}: the skin creeps; the elastic model "
+                         "misses it and a relaxation spectrum fits")
+    if report.get("beyond_space"):
+        lines.append("verdict beyond_space: the model sits at an edge of the simulated space "
+                     "(" + ", ".join(b["parameter"] for b in report["beyond_space"])
+                     + "): the effects named are those of the nearest simulated skin")
+    for pat in report.get("patterns", []):
+        lines.append(f"Not explained: {pat}.")
     return "\n".join(lines)
 
 
@@ -261,12 +419,21 @@ def write_time_report(report: dict, out_dir) -> dict:
              "pdf": out / "fit.pdf"}
     _write_text(paths["json"], json.dumps(report, indent=1, default=_json_default) + "\n")
     g = report["gain"]
+    other = "final" if report.get("effects") else "viscoelastic"
+    other_name = report["final"]["model"] if report.get("effects") else "creep alone"
     md = ["# Diagnosis of time curves", "", f"Input: `{report['input']['path']}`", "",
-          "```", report["summary"], "```", "",
-          "| curve | phase | RMS elastic (µm) | RMS viscoelastic (µm) |", "|---|---|---|---|"]
+          "```", report["summary"], "```", "", "## The model, effect by effect", "",
+          "| step | from | option | Δχ² | ΔBIC | decisive | added |", "|---|---|---|---|---|---|---|"]
+    for step in report.get("steps", []):
+        for o in step["options"]:
+            md.append(f"| {step['step']} | {step['from']} | {o['model']} | "
+                      f"{o['delta_chi2']:+.1f} | {o['delta_bic']:+.1f} | "
+                      f"{'yes' if o['decisive'] else 'no'} | "
+                      f"{'**yes**' if o['effects'][-1] == step['added'] else ''} |")
+    md += ["", f"| curve | phase | RMS elastic (µm) | RMS {other_name} (µm) |", "|---|---|---|---|"]
     for curve, phases in g["rms_um"].items():
         for ph, v in phases.items():
-            md.append(f"| {curve} | {ph} | {_fmt(v['elastic'])} | {_fmt(v['viscoelastic'])} |")
+            md.append(f"| {curve} | {ph} | {_fmt(v['elastic'])} | {_fmt(v[other])} |")
     if report["warnings"]:
         md += ["", "## Warnings", ""] + [f"- {w}" for w in report["warnings"]]
     _write_text(paths["md"], "\n".join(md) + "\n")
@@ -307,17 +474,23 @@ def _plot(report, png, pdf, atomic_output):
         m = np.asarray(f["measured_mm"])
         ax, rx = axes[0, k], axes[1, k]
         ax.plot(t, m, ".", ms=2, color="0.4", label="measured")
-        for key, style in (("elastic_mm", "C0-"), ("viscoelastic_mm", "C3-")):
-            y = np.asarray(f[key], dtype=float)
-            ax.plot(t, y, style, lw=1.2, label=key.replace("_mm", ""))
-            rx.plot(t, 1e3 * (m - y), style, lw=0.8)
+        models = f.get("models") or {"neo_hookean": f["elastic_mm"],
+                                     VISCOELASTIC_CREEP: f["viscoelastic_mm"]}
+        chain = report.get("chain") or list(models)
+        order = chain + [n for n in models if n not in chain]
+        for j, name in enumerate(order):
+            y = np.asarray(models[name], dtype=float)
+            final = bool(report.get("effects")) and name == chain[-1]
+            ax.plot(t, y, f"C{j}-", lw=1.6 if final else 0.9,
+                    label=name + (" (final)" if final else ""))
+            rx.plot(t, 1e3 * (m - y), f"C{j}-", lw=0.9 if final else 0.6)
         ax.set_title(label)
         ax.set_ylabel("deflection (mm)")
         rx.set_ylabel("residual (µm)")
         rx.set_xlabel("time (s)")
         rx.axhline(0.0, color="0.7", lw=0.5)
         ax.legend(fontsize=8)
-    fig.suptitle(f"named: {report['named']}")
+    fig.suptitle("effects: " + (", ".join(report.get("effects") or []) or "none"))
     fig.tight_layout()
     for path in (png, pdf):
         with atomic_output(path) as tmp:

@@ -72,7 +72,7 @@ from ._surrogate import (
     surrogate_deflection,
     write_surrogate_space,
 )
-from ._time_fit import TimeFit, TimeFitData, fit_time_model
+from ._time_fit import TimeCurveModel, TimeFit, TimeFitData, fit_time_model
 from ._time_intervals import laplace_intervals, time_bound_flags
 from ._window_focusing import (
     IdentificationError,
@@ -104,6 +104,7 @@ __all__ = [
     "TimeFit",
     "TimeFitData",
     "fit_time_model",
+    "TimeCurveModel",
     "laplace_intervals",
     "time_bound_flags",
     "BOUND_FRACTION",

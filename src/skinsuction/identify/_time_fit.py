@@ -1,7 +1,9 @@
 """Fit the elastic (g = 0) or viscoelastic model to time curves: the core.
 
-:func:`fit_time_model` fits ``theta = (log10 X1d, log10 X1h/X1d[, log10 g_i,
-log10 tau_i ...])`` (0, 1 or 2 Prony terms, one spectrum for both layers) to one
+:func:`fit_time_model` fits ``theta = (log10 X1d, log10 X1h/X1d[, u][, log10 g_i,
+log10 tau_i ...])`` (``u`` the axis coordinate of an elastic cause, such as the
+dermis's strain stiffening X2d/X1d, when the rays are that cause's; 0, 1 or 2
+Prony terms, one spectrum for both layers) to one
 or more time curves (:class:`TimeFitData`, e.g. two probes of one skin) with the
 fast path on the scale-free space (:mod:`._time_model`), by the fitting engine
 (:func:`skinsuction.identify.repeated_fit`): window focusing in the box of the
@@ -171,8 +173,13 @@ def _grid_step(d) -> float:
 class TimeCurveModel:
     """Deflections of candidates theta on every fitted curve (the fast path).
 
-    ``rays`` maps probe (mm) to its neo-Hookean :class:`~skinsuction.space.RaySpace`
-    (``LoadedSpace.probe(p).space``); ``terms`` Prony terms (0: elastic).
+    ``rays`` maps probe (mm) to its :class:`~skinsuction.space.RaySpace`
+    (``LoadedSpace.probe(p).space``): the neo-Hookean one, or one cause's
+    (:meth:`skinsuction.space.LoadedSpace.cause_rays`, e.g. strain stiffening:
+    the fast path then drives the nonlinear elastic curve of that skin, and theta
+    holds the cause's axis coordinate after X1h/X1d); ``terms`` Prony terms (0:
+    elastic).  :attr:`k0` is where the spectrum starts in theta (2, or 3 with a
+    cause).
     """
 
     def __init__(self, rays: dict, data: list, terms: int):
@@ -183,31 +190,48 @@ class TimeCurveModel:
         for p in sorted({d.probe_mm for d in self.data}):
             p_max = max(float(d.pressure_mbar.max()) for d in self.data if d.probe_mm == p)
             self.elastic[p] = ElasticRays(rays[p], p, p_max)
+        causes = {None if e.cause is None else e.cause.name for e in self.elastic.values()}
+        if len(causes) != 1:
+            raise ValueError(f"the probes' spaces hold different causes: {sorted(map(str, causes))}")
+        #: the elastic cause of the spaces (None: neo-Hookean)
+        self.cause = next(iter(self.elastic.values())).cause
         lo = np.max([e.lower for e in self.elastic.values()], axis=0)
         hi = np.min([e.upper for e in self.elastic.values()], axis=0)
+        self.k0 = lo.size
         s_lo, s_hi = spectrum_bounds(self.terms)
         self.lower = np.concatenate([lo, s_lo])
         self.upper = np.concatenate([hi, s_hi])
         self.d = self.lower.size
-        self.names = theta_names(self.terms)
+        self.names = theta_names(self.terms, self.cause)
 
     def __call__(self, theta) -> list:
         """[(N, T_k) deflection in mm for each curve k]."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
-        out = []
+        k0, out = self.k0, []
         for d in self.data:
-            p_eff = effective_pressures(theta[:, 2:], d.time_s, d.pressure_mbar, d.breaks)
-            out.append(self.elastic[d.probe_mm](theta[:, :2], p_eff))
+            p_eff = effective_pressures(theta[:, k0:], d.time_s, d.pressure_mbar, d.breaks)
+            out.append(self.elastic[d.probe_mm](theta[:, :k0], p_eff))
         return out
+
+    def cause_value(self, theta) -> float | None:
+        """The cause's parameter at theta (e.g. X2d in MPa), None without a cause."""
+        if self.cause is None:
+            return None
+        theta = np.asarray(theta, dtype=float).reshape(-1)
+        c = float(self.cause.from_axis(theta[2]))
+        return float(self.cause.value(coordinate=c, dermis_X1=10.0 ** theta[0]))
 
     def parameters(self, theta) -> dict:
         theta = np.asarray(theta, dtype=float).reshape(-1)
         x1d = 10.0 ** theta[0]
-        g, tau = prony_of(theta)
+        g, tau = prony_of(theta, self.k0)
         factor = 1.0 + sum(g)
-        return {"X1d": float(x1d), "X1h": float(x1d * 10.0 ** theta[1]), "g": g, "tau_s": tau,
-                "X1d_instantaneous": float(x1d * factor),
-                "X1h_instantaneous": float(x1d * 10.0 ** theta[1] * factor)}
+        out = {"X1d": float(x1d), "X1h": float(x1d * 10.0 ** theta[1]), "g": g, "tau_s": tau,
+               "X1d_instantaneous": float(x1d * factor),
+               "X1h_instantaneous": float(x1d * 10.0 ** theta[1] * factor)}
+        if self.cause is not None:
+            out[self.cause.symbol] = self.cause_value(theta)
+        return out
 
 
 class TimeObjective(Chi2Objective):
@@ -258,6 +282,7 @@ class TimeFit:
     residual_um: list
     phase_chi2: list
     wf: dict = field(default_factory=dict)
+    cause: str | None = None  # the elastic cause of the space fitted (None: neo-Hookean)
 
     @property
     def finite(self) -> bool:
@@ -279,7 +304,7 @@ def evaluate_time_fit(model: TimeCurveModel, theta, wf=None) -> TimeFit:
     -------
     TimeFit
     """
-    theta = sort_terms(theta)
+    theta = sort_terms(theta, model.k0)
     curves = [m[0] for m in model(theta[None, :])]
     chi2, fitted, res, per_phase = 0.0, [], [], []
     for d, m in zip(model.data, curves):
@@ -294,7 +319,8 @@ def evaluate_time_fit(model: TimeCurveModel, theta, wf=None) -> TimeFit:
         chi2 = math.inf
     n = sum(d.n for d in model.data)
     return TimeFit(model.terms, theta, model.parameters(theta), chi2, n, model.d, fitted, res,
-                   per_phase, dict(wf or {}))
+                   per_phase, dict(wf or {}),
+                   None if model.cause is None else model.cause.name)
 
 
 def fit_time_model(rays: dict, data: list, *, terms: int = 1, seed=0, repeats: int = 2,
@@ -305,7 +331,8 @@ def fit_time_model(rays: dict, data: list, *, terms: int = 1, seed=0, repeats: i
     Parameters
     ----------
     rays : dict
-        Probe (mm) -> neo-Hookean RaySpace.
+        Probe (mm) -> RaySpace: the neo-Hookean one, or an elastic cause's (its
+        axis coordinate is then fitted too, :class:`TimeCurveModel`).
     data : list of TimeFitData
     terms : {0, 1, 2}
     seed : int or SeedSequence

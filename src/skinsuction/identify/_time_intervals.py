@@ -221,28 +221,29 @@ def sandwich_covariance(J, Bw, Dw):
     return Hinv @ meat @ Hinv
 
 
-def _log_forms(theta, terms: int) -> dict:
+def _log_forms(theta, terms: int, k0: int = 2) -> dict:
     """Each reported quantity as a linear form of theta in log10 (exact in the logs;
-    the instantaneous moduli by the derivative of log10(1 + sum g) at the fit)."""
+    the instantaneous moduli by the derivative of log10(1 + sum g) at the fit).
+    ``k0``: where the spectrum starts in theta."""
     d = theta.size
     forms = {"X1d": np.eye(d)[0], "X1h": np.eye(d)[0] + np.eye(d)[1]}
-    order = np.argsort(theta[3::2]) if terms else []
+    order = np.argsort(theta[k0 + 1::2]) if terms else []
     for k, j in enumerate(order, start=1):
-        forms[f"g_{k}"] = np.eye(d)[2 + 2 * j]
-        forms[f"tau_{k}"] = np.eye(d)[3 + 2 * j]
+        forms[f"g_{k}"] = np.eye(d)[k0 + 2 * j]
+        forms[f"tau_{k}"] = np.eye(d)[k0 + 1 + 2 * j]
     if terms:
-        g = 10.0 ** theta[2::2]
+        g = 10.0 ** theta[k0::2]
         dlog = np.zeros(d)
-        dlog[2::2] = g / (1.0 + g.sum())
+        dlog[k0::2] = g / (1.0 + g.sum())
         forms["X1d_instantaneous"] = forms["X1d"] + dlog
         forms["X1h_instantaneous"] = forms["X1h"] + dlog
     return forms
 
 
-def _form_interval(name, a, theta, cov, q, lo, hi, ok) -> dict:
+def _form_interval(name, a, theta, cov, q, lo, hi, ok, k0: int = 2) -> dict:
     """The interval of one form: centre +- sqrt(q a^T C a), cut at the box (open there)."""
     centre = float(a @ theta) if not name.endswith("instantaneous") else \
-        float(a[:2] @ theta[:2] + math.log10(1.0 + (10.0 ** theta[2::2]).sum()))
+        float(a[:2] @ theta[:2] + math.log10(1.0 + (10.0 ** theta[k0::2]).sum()))
     half = math.sqrt(max(float(a @ cov @ a), 0.0) * q)
     lower, upper = centre - half, centre + half
     # cut at the box of the space and the spectrum (the form's range over it)
@@ -256,6 +257,34 @@ def _form_interval(name, a, theta, cov, q, lo, hi, ok) -> dict:
         lo_open = up_open = True
     return {"estimate": 10.0 ** centre, "lower": 10.0 ** lower, "upper": 10.0 ** upper,
             "lower_open": lo_open, "upper_open": up_open}
+
+
+def _cause_interval(model, theta, cov, q, ok) -> dict:
+    """The interval of the cause's parameter (e.g. X2d, MPa): linear in its value
+    (it may be the neutral 0), the gradient over theta by central differences,
+    cut at the space's range of the axis coordinate (open there)."""
+    def value(t):
+        return model.cause_value(t)
+
+    k = 2  # the axis coordinate
+    grad = np.zeros(theta.size)
+    for i in (0, k):
+        h = 1e-5 * max(model.upper[i] - model.lower[i], 1e-12)
+        tp, tm = theta.copy(), theta.copy()
+        tp[i], tm[i] = min(theta[i] + h, model.upper[i]), max(theta[i] - h, model.lower[i])
+        grad[i] = (value(tp) - value(tm)) / (tp[i] - tm[i])
+    centre = value(theta)
+    half = math.sqrt(max(float(grad @ cov @ grad), 0.0) * q)
+    edge_lo = value(np.concatenate([theta[:k], [model.lower[k]], theta[k + 1:]]))
+    edge_hi = value(np.concatenate([theta[:k], [model.upper[k]], theta[k + 1:]]))
+    lower, upper = centre - half, centre + half
+    lo_open, up_open = bool(lower <= edge_lo), bool(upper >= edge_hi)
+    if not ok[[0, k]].all():
+        lo_open = up_open = True
+    return {"estimate": centre, "lower": max(lower, edge_lo), "upper": min(upper, edge_hi),
+            "lower_open": lo_open, "upper_open": up_open,
+            "scale": "linear in the value; its ends are the space's range of "
+                     f"{model.cause.name} at the fitted X1d"}
 
 
 def _form_correlations(forms: dict, cov) -> dict:
@@ -321,8 +350,11 @@ def laplace_intervals(rays: dict, data: list, fit: TimeFit, *, level: float = 0.
                      "are open on that side")
     scale = misfit_scale(fit.chi2, max(n - d, 1))
     q = interval_threshold(level) * scale
-    forms = _log_forms(theta, fit.terms)
-    out = {name: _form_interval(name, a, theta, cov, q, lo, hi, ok) for name, a in forms.items()}
+    forms = _log_forms(theta, fit.terms, model.k0)
+    out = {name: _form_interval(name, a, theta, cov, q, lo, hi, ok, model.k0)
+           for name, a in forms.items()}
+    if model.cause is not None:
+        out[model.cause.symbol] = _cause_interval(model, theta, cov, q, ok)
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     method = ("Gauss-Newton (Laplace) approximation in log10 of each parameter, the "
               "covariance of the weighted least-squares estimate under a correlated model "
@@ -364,12 +396,23 @@ def time_bound_flags(rays: dict, data: list, fit: TimeFit, config_keys=None) -> 
     model = TimeCurveModel(rays, data, fit.terms)
     obj = TimeObjective(model)
     theta = np.asarray(fit.theta, dtype=float)
-    names = ["X1d", "X1h"] + [f"{k}_{i}" for i in range(1, fit.terms + 1) for k in ("g", "tau")]
-    kinds = ["log", "log"] + ["axis"] * (2 * fit.terms)
-    keys = config_keys or [(None, None)] * len(names)
+    cause = [] if model.cause is None else [model.cause.symbol]
+    names = (["X1d", "X1h"] + cause
+             + [f"{k}_{i}" for i in range(1, fit.terms + 1) for k in ("g", "tau")])
+    kinds = ["log", "log"] + ["axis"] * (len(cause) + 2 * fit.terms)
+    keys = list(config_keys or [(None, None)] * 2)[:2]
+    if cause:
+        keys.append((f"scale_free_space.causes.{model.cause.name}.nodes",) * 2)
     keys = list(keys) + [(f"the spectrum's bounds (g {_bounds_text('g')}, tau "
                           f"{_bounds_text('tau')} s)",) * 2] * (len(names) - len(keys))
     flags = bound_flags(obj, theta, names, kinds, keys)
+    for f in flags:
+        f["neutral"] = False
+    if cause:
+        # a cause at its neutral end (e.g. X2d = 0) is the model without it, not an edge
+        f, c = flags[2], model.cause
+        end = c.nodes[0] if f["side"] == "lower" else c.nodes[-1]
+        f["neutral"] = bool(f["edge"] == "window" and end == c.neutral)
     return {f["parameter"]: f for f in flags}
 
 

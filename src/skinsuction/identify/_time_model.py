@@ -50,13 +50,16 @@ G_BOUNDS = (1e-3, 5.0)
 TAU_BOUNDS_S = (1e-3, 10.0)
 
 
-def theta_names(terms: int) -> list:
-    """Names of the coordinates of theta for ``terms`` Prony terms.
+def theta_names(terms: int, cause=None) -> list:
+    """Names of the coordinates of theta for ``terms`` Prony terms (and an elastic
+    cause's axis coordinate before them, :meth:`skinsuction.space.Cause.to_axis`).
 
     >>> theta_names(1)
     ['log10 X1d', 'log10 X1h/X1d', 'log10 g_1', 'log10 tau_1']
     """
     out = ["log10 X1d", "log10 X1h/X1d"]
+    if cause is not None:
+        out.append(f"{cause.name} axis")
     for i in range(1, terms + 1):
         out += [f"log10 g_{i}", f"log10 tau_{i}"]
     return out
@@ -201,7 +204,8 @@ class ElasticRays:
     Parameters
     ----------
     space : RaySpace
-        The neo-Hookean ray space (e.g. ``load_space().probe(6).space``).
+        The neo-Hookean ray space (e.g. ``load_space().probe(6).space``), or a
+        cause's (e.g. strain stiffening: the nonlinear elastic curve of that skin).
     probe_mm : float
     p_max_mbar : float
         The largest suction of the curve: it raises the lowest X1d searched to
@@ -227,10 +231,13 @@ class ElasticRays:
         self.x1d_ref = float(space.spec.x1d_ref)
         self._axis = LagrangeAxis(np.asarray(space.spec.pressures_mbar, dtype=float))
         self.load_max = float(space.spec.load_max)
+        self.cause = space.cause
+        self.d = self._interp.d
 
     def __call__(self, theta, pressure_mbar) -> np.ndarray:
-        """Deflections (N, T) in mm of candidates ``theta (N, 2)`` at ``pressure (N, T)``;
-        NaN where a ray stopped before that load (or outside the space)."""
+        """Deflections (N, T) in mm of candidates ``theta (N, d)`` (``d`` = 2, or 3 with
+        the cause's axis coordinate of a cause's space) at ``pressure (N, T)``; NaN
+        where a ray stopped before that load (or outside the space)."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         rays = self._interp.combined_rays(theta)  # (N, n_p), the space's NaN policy
         n, T = pressure_mbar.shape
@@ -250,21 +257,22 @@ class ElasticRays:
         return vals.reshape(n, T)
 
 
-def prony_of(theta) -> tuple:
-    """``(g, tau_s)`` lists of one theta, terms sorted by tau."""
+def prony_of(theta, start: int = 2) -> tuple:
+    """``(g, tau_s)`` lists of one theta (its spectrum from index ``start``), terms
+    sorted by tau."""
     theta = np.asarray(theta, dtype=float).reshape(-1)
-    g, tau = 10.0 ** theta[2::2], 10.0 ** theta[3::2]
+    g, tau = 10.0 ** theta[start::2], 10.0 ** theta[start + 1::2]
     order = np.argsort(tau)
     return [float(v) for v in g[order]], [float(v) for v in tau[order]]
 
 
-def sort_terms(theta) -> np.ndarray:
-    """theta with its Prony terms in the order of increasing tau."""
+def sort_terms(theta, start: int = 2) -> np.ndarray:
+    """theta with its Prony terms (from index ``start``) in the order of increasing tau."""
     theta = np.asarray(theta, dtype=float).reshape(-1).copy()
-    terms = (theta.size - 2) // 2
+    terms = (theta.size - start) // 2
     if terms > 1:
-        pairs = theta[2:].reshape(terms, 2)
-        theta[2:] = pairs[np.argsort(pairs[:, 1])].reshape(-1)
+        pairs = theta[start:].reshape(terms, 2)
+        theta[start:] = pairs[np.argsort(pairs[:, 1])].reshape(-1)
     return theta
 
 

@@ -183,7 +183,8 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
                        repeats: int = 2, seed: int = 0, noise_um: float | None = None,
                        level: float = 0.95, phases: str = "all", thickness=None,
                        ue_time_s: float = 0.1,
-                       window_focusing: dict | None = None) -> TimeIdentification:
+                       window_focusing: dict | None = None,
+                       effect: str | None = None) -> TimeIdentification:
     """Identify X1d, X1h (long-time) and ``terms`` Prony terms of loaded time curves.
 
     The steps: read and check (:func:`prepare_time_fit`), fit
@@ -219,6 +220,10 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
         When Ue of the R parameters is read after the suction starts (s).
     window_focusing : dict, optional
         Overrides of :data:`TIME_WF` (``n_samples``, ``n_best``, ``tolerance``, ``max_iter``).
+    effect : str, optional
+        An elastic cause fitted with the spectrum (e.g. ``"strain_stiffening"``: the
+        fast path then drives the stiffening skin's elastic curve, and X2d is
+        identified with its interval); its rays must lie beside the space.
 
     Returns
     -------
@@ -234,6 +239,12 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
     prep = prepare_time_fit(data, space, probes=probes, curve=curve, noise_um=noise_um,
                             phases=phases, thickness=thickness)
     rays, fit_data, warnings = prep["rays"], prep["data"], prep["warnings"]
+    if effect is not None:
+        rays, notes = prep["space"].cause_rays(effect, sorted(rays))
+        warnings += [f"geometry: {n}" for n in notes]
+        if not rays:
+            raise InputError(f"{data.path}: the effect {effect} is not free here (see the "
+                             "notes: " + "; ".join(notes) + ")")
     wf = {**TIME_WF, **(window_focusing or {})}
     try:
         fit = fit_time_model(rays, fit_data, terms=terms, seed=seed, repeats=repeats,
@@ -247,12 +258,13 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
                 "phases": phases, "level": float(level), "window_focusing": wf,
                 "g_bounds": list(G_BOUNDS), "tau_bounds_s": list(TAU_BOUNDS_S),
                 "probes_mm": [c.probe_mm for c in prep["curves"]], "curve": curve,
-                "ue_time_s": float(ue_time_s)}
+                "ue_time_s": float(ue_time_s), "effect": effect}
     noise = {"sd_um": [1e3 * d.noise_sd_mm for d in fit_data],
              "method": "given" if noise_um is not None else
              "the loader's (third differences in time, not below q/sqrt(12))",
              "resolution_mm": [c.resolution_mm for c in prep["curves"]]}
-    return _time_identification(data, prep, fit, intervals, flags, settings, noise)
+    return _time_identification(data, {**prep, "rays": rays}, fit, intervals, flags, settings,
+                                noise)
 
 
 def _flag_bounds(rays, fit_data, fit, intervals, warnings) -> dict:
@@ -266,6 +278,12 @@ def _flag_bounds(rays, fit_data, fit, intervals, warnings) -> dict:
         if not f["at_bound"]:
             continue
         value = intervals[name]["estimate"]
+        if name not in ("X1d", "X1h") and not name.startswith(("g_", "tau_")):
+            if not f.get("neutral"):
+                warnings.append(f"AT BOUND: {name} = {value:.4g} sits at the {f['side']} end "
+                                f"of the simulated range of its cause; widen it with "
+                                f"{f['config_key']}")
+            continue
         if name in ("X1d", "X1h"):
             where = ("the end of the simulated window" if f["edge"] == "window"
                      else "the coverage frontier (the FE rays stop there: the suction "
@@ -344,15 +362,24 @@ def _time_identification(data, prep, fit, intervals, flags, settings,
     curves, rays, fit_data, geometry, space = (prep["curves"], prep["rays"], prep["data"],
                                                prep["geometry"], prep["space"])
     params, terms, phases = fit.parameters, settings["terms"], settings["phases"]
+    cause = next(iter(rays.values())).cause
+    skin = Skin.two_layer(params["X1d"], params["X1h"], t_d=geometry.t_d, t_h=geometry.t_h,
+                          bottom=space.bottom, spectrum=Prony(params["g"], params["tau_s"]))
+    model = {"name": "two-layer neo-Hookean, one Prony spectrum for both layers, fast "
+                     "path M_el(p_eff) on the scale-free space",
+             "convention": "X1d, X1h long-time (equilibrium) moduli; instantaneous "
+                           "X1 (1 + sum g)", "terms": int(terms)}
+    if cause is not None:
+        skin = skin.replace({path: params[cause.symbol] for path in cause.paths})
+        model.update({"name": f"two-layer, {cause.name} ({cause.symbol}), one Prony spectrum "
+                              "for both layers, fast path M_el(p_eff) on the cause's rays",
+                      "effect": cause.name, cause.symbol: params[cause.symbol]})
     quality, fitted = _fit_quality(curves, fit_data, fit)
     spec = next(iter(rays.values())).spec
     return TimeIdentification(
         skinsuction_version=__version__,
         created_utc=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        model={"name": "two-layer neo-Hookean, one Prony spectrum for both layers, fast "
-                       "path M_el(p_eff) on the scale-free space",
-               "convention": "X1d, X1h long-time (equilibrium) moduli; instantaneous "
-                             "X1 (1 + sum g)", "terms": int(terms)},
+        model=model,
         X1d=params["X1d"], X1h=params["X1h"], g=params["g"], tau_s=params["tau_s"],
         X1d_instantaneous=params["X1d_instantaneous"],
         X1h_instantaneous=params["X1h_instantaneous"],
@@ -382,9 +409,7 @@ def _time_identification(data, prep, fit, intervals, flags, settings,
         fit=fitted,
         provenance=collect(config=settings),
         warnings=prep["warnings"],
-        skin=Skin.two_layer(params["X1d"], params["X1h"], t_d=geometry.t_d, t_h=geometry.t_h,
-                            bottom=space.bottom,
-                            spectrum=Prony(params["g"], params["tau_s"])).to_dict(),
+        skin=skin.to_dict(),
     )
 
 

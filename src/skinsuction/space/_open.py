@@ -307,6 +307,61 @@ class LoadedSpace:
             self._shared[("notes", *key)] = notes
         return self._shared[key]
 
+    def cause_names(self) -> list:
+        """The elastic causes whose ray spaces lie beside the neo-Hookean one (a
+        scale-free space folder), in the registry's order; [] for a grid."""
+        return [n for n in self._cause_spaces() if n != BASELINE]
+
+    def _cause_spaces(self) -> dict:
+        if self.rays is None or self.info.get("path") is None:
+            return {}
+        if "causes" not in self._shared:
+            path = Path(self.info["path"])
+            self._shared["causes"] = read_ray_spaces(path if path.is_dir() else path.parent)
+        return self._shared["causes"]
+
+    def cause_rays(self, name: str, probes) -> tuple:
+        """``({probe: RaySpace}, notes)``: a cause's rays at :attr:`geometry`.
+
+        On the paper's layers, the space's own rays.  At other layers the
+        cause's effect on log M is carried over from the layers it was simulated
+        for (:func:`skinsuction.space.spaces_at` without solving its rays, an
+        approximation the notes state), on the neo-Hookean rays of these layers.
+
+        Parameters
+        ----------
+        name : str
+            A cause of :meth:`cause_names` (e.g. ``"strain_stiffening"``).
+        probes : iterable of float
+
+        Returns
+        -------
+        (dict, list of str)
+            Empty rays when the cause is left out at this measurement (its
+            thickness is given, or the probes lack it): the notes say why.
+
+        Raises
+        ------
+        InputError
+            When the space has no such cause.
+        """
+        spaces = self._cause_spaces()
+        if name not in spaces or name == BASELINE:
+            raise InputError(f"{self.info['path']}: no {name!r} rays beside the neo-Hookean "
+                             f"space (causes: {', '.join(self.cause_names()) or 'none'})")
+        probes = [float(p) for p in probes]
+        key = ("cause", name, tuple(probes), self._geometry_key())
+        if key not in self._shared:
+            try:
+                out, notes = spaces_at({BASELINE: self.rays, name: spaces[name]}, probes,
+                                       self.geometry, self.on_demand, solve_causes=False)
+            except GeometryOutsideSpace as err:
+                raise InputError(f"{self.info['path']}: {err}") from None
+            # left out (a given thickness, or probes it was not simulated for): the
+            # notes say why
+            self._shared[key] = ({p: out[name] for p in probes} if name in out else {}, notes)
+        return self._shared[key]
+
     def check_probes(self, probes) -> list:
         """The probes as floats, each checked against the space (:meth:`probe`).
 

@@ -1,0 +1,302 @@
+"""Time curves: the diagnosis builds the model effect by effect.
+
+Real skin creeps and stiffens at once (published Cutometer R5 < 1 needs both,
+docs/effects.md), so a time curve is diagnosed by forward selection over the
+effects a time curve can show:
+
+* ``viscoelastic_creep``: one Prony term over both layers (g, tau), and once it is
+  in, ``creep_second_term``: a second term (a spectrum of two, as the literature's
+  10 ms and 0.1-1 s), a refinement of creep, not an effect of its own;
+* each elastic cause of the space (strain stiffening X2d, pre-tension lambda0, a
+  layer thickness not given): the fast path then drives the nonlinear elastic
+  curve of that skin (:class:`skinsuction.identify.TimeCurveModel` on the
+  cause's rays).
+
+A model is a set of effects with at most one elastic cause (a ray space holds one
+cause coordinate).  From the neo-Hookean stack, each step fits every model with
+one effect more and adds the one of lowest BIC while it is decisive: the model
+it extends misfits (chi^2 above its ``1 - alpha`` quantile) and the BIC falls by
+at least ``|delta_bic|`` (the rule of the single-cause time diagnosis before).
+A model that does not misfit ends the selection without fitting its options
+(none could be decisive); creep alone is always fitted, for the report.  Models
+within ``ambiguity_bic`` of the chosen one that are decisive too are tied
+(``ambiguous_with``).  Then each chosen effect is checked against the final
+model: the model without it must lie ``|delta_bic|`` above, or the effect is
+dropped (``removed``).
+
+What no model explains is described in words, not forced into a parameter: a
+first cycle that departs from the later ones (preconditioning) and the misfit
+left per phase.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from ._creep import VISCOELASTIC_CREEP
+from ._stats import bic
+
+__all__ = ["CREEP_SECOND_TERM", "TimeModel", "EffectFitter", "select_effects", "model_name",
+           "cycle_pattern", "physical_effects"]
+
+#: Name of the model without effects.
+BASELINE_NAME = "neo_hookean"
+#: The refinement of creep: a second Prony term.
+CREEP_SECOND_TERM = "creep_second_term"
+
+
+def model_name(effects) -> str:
+    """``"neo_hookean"`` or the effects joined by ``+`` in the order added.
+
+    >>> model_name(()), model_name(("viscoelastic_creep", "strain_stiffening"))
+    ('neo_hookean', 'viscoelastic_creep+strain_stiffening')
+    """
+    return "+".join(effects) if effects else BASELINE_NAME
+
+
+def physical_effects(effects) -> list:
+    """The effects of a model as reported: the second creep term is creep's.
+
+    >>> physical_effects(("viscoelastic_creep", "creep_second_term", "pre_tension"))
+    ['viscoelastic_creep', 'pre_tension']
+    """
+    return [e for e in effects if e != CREEP_SECOND_TERM]
+
+
+def _terms(key) -> int:
+    return int(VISCOELASTIC_CREEP in key) + int(CREEP_SECOND_TERM in key)
+
+
+def _elastic(key):
+    return next((e for e in key if e not in (VISCOELASTIC_CREEP, CREEP_SECOND_TERM)), None)
+
+
+@dataclass
+class TimeModel:
+    """One fitted model: its effects (in the order added), the fit, the rays it used."""
+
+    effects: tuple
+    fit: object  # TimeFit
+    rays: dict
+    chi2: float
+    n_params: int
+    n_points: int
+
+    @property
+    def name(self) -> str:
+        return model_name(self.effects)
+
+    @property
+    def bic(self) -> float:
+        return bic(self.chi2, self.n_params, self.n_points)
+
+    @property
+    def misfit_p(self) -> float:
+        return float(stats.chi2.sf(self.chi2, max(self.n_points - self.n_params, 1)))
+
+    @property
+    def elastic_cause(self) -> str | None:
+        return _elastic(self.effects)
+
+    @property
+    def terms(self) -> int:
+        return _terms(self.effects)
+
+
+class EffectFitter:
+    """Fits (and caches) the model of any set of effects on prepared time curves.
+
+    Parameters
+    ----------
+    prep : dict
+        :func:`skinsuction.identify.time_curves.prepare_time_fit`'s output.
+    settings : Settings
+    causes : list of str
+        The elastic causes tried (their rays: ``prep["space"].cause_rays``).
+    """
+
+    def __init__(self, prep: dict, settings, causes):
+        self.prep, self.settings = prep, settings
+        self.data = prep["data"]
+        self.probes = sorted(prep["rays"])
+        root = np.random.SeedSequence(int(settings.seed))
+        # the elastic and creep fits keep the seeds they had before effects composed
+        self._seeds = dict(zip([(), (VISCOELASTIC_CREEP,)], root.spawn(2)))
+        self._seed = int(settings.seed)
+        self.notes, self.rays = [], {None: prep["rays"]}
+        for name in causes:
+            rays, notes = prep["space"].cause_rays(name, self.probes)
+            self.notes += [n for n in notes if n not in self.notes]
+            if rays:
+                self.rays[name] = rays
+        self.causes = [c for c in causes if c in self.rays]
+        self._cache = {}
+
+    def addable(self, effects) -> list:
+        """The effects one step may add to ``effects`` (one elastic cause at most; the
+        second creep term once creep is in)."""
+        if VISCOELASTIC_CREEP not in effects:
+            out = [VISCOELASTIC_CREEP]
+        else:
+            out = [] if CREEP_SECOND_TERM in effects else [CREEP_SECOND_TERM]
+        if not any(e in self.causes for e in effects):
+            out += self.causes
+        return out
+
+    def _seed_of(self, key):
+        if key in self._seeds:
+            return self._seeds[key]
+        cause = _elastic(key)
+        index = 2 + 3 * (self.causes.index(cause) + 1 if cause else 0) + _terms(key)
+        return np.random.SeedSequence(self._seed, spawn_key=(index,))
+
+    def fit(self, effects, parent: TimeModel | None = None) -> TimeModel:
+        """The model of ``effects`` (cached by set: the order only names it)."""
+        from skinsuction.identify import fit_time_model
+
+        key = tuple(sorted(effects, key=lambda e: (e != VISCOELASTIC_CREEP, e)))
+        if key not in self._cache:
+            cause, terms = _elastic(key), _terms(key)
+            rays = self.rays[cause]
+            # the most specific nested fits first (the elastic fit alone starts creep's)
+            nested = sorted(self._cache.values(), key=lambda m: -len(m.effects))
+            starts = [s for s in (self._start(key, m) for m in nested) if s is not None]
+            fit = fit_time_model(rays, self.data, terms=terms, seed=self._seed_of(key),
+                                 repeats=self.settings.repeats, starts=starts[:2])
+            self._cache[key] = TimeModel(tuple(effects), fit, rays, float(fit.chi2),
+                                         int(fit.n_params), int(fit.n_points))
+        model = self._cache[key]
+        if model.effects != tuple(effects):  # the same fit, named in this order
+            model = TimeModel(tuple(effects), model.fit, model.rays, model.chi2,
+                              model.n_params, model.n_points)
+        return model
+
+    def _start(self, key, nested: TimeModel):
+        """A start for ``key`` from a fitted model nested in it: the nested theta with
+        the missing effect at its neutral value (a mild spectrum for creep)."""
+        have = set(nested.effects)
+        if not have < set(key) or not nested.fit.finite:
+            return None
+        theta = np.asarray(nested.fit.theta, dtype=float)
+        cause = _elastic(key)
+        if cause is not None and cause not in have:
+            c = self.rays[cause][self.probes[0]].cause
+            theta = np.concatenate([theta[:2], [c.to_axis(c.neutral)], theta[2:]])
+        if VISCOELASTIC_CREEP in key and VISCOELASTIC_CREEP not in have:
+            theta = np.concatenate([theta, [math.log10(0.3), math.log10(0.5)]])
+        if CREEP_SECOND_TERM in key and CREEP_SECOND_TERM not in have:
+            # a small fast term beside the fitted one (the literature's 10 ms)
+            theta = np.concatenate([theta, [math.log10(0.05), math.log10(0.01)]])
+        return theta
+
+
+def _option(model: TimeModel, parent: TimeModel, settings) -> dict:
+    d = model.bic - parent.bic
+    return {"model": model.name, "effects": list(model.effects), "chi2": model.chi2,
+            "bic": model.bic, "delta_bic": float(d), "delta_chi2": model.chi2 - parent.chi2,
+            "decisive": bool(d <= settings.delta_bic and parent.misfit_p < settings.alpha)}
+
+
+def select_effects(fitter: EffectFitter, settings) -> dict:
+    """Forward selection of the effects, then the check of each against the final model.
+
+    Parameters
+    ----------
+    fitter : EffectFitter
+    settings : Settings
+        ``alpha``, ``delta_bic`` and ``ambiguity_bic`` are used.
+
+    Returns
+    -------
+    dict
+        ``base`` and ``final`` (:class:`TimeModel`), ``chain`` (the models of
+        the steps taken, base first), ``steps`` (JSON-able: per step, every
+        option with its chi^2, BIC and ΔBIC against the model it extends, the
+        effect added or None, the tied effects), ``removed`` (effects the final
+        check dropped, with their ΔBIC), ``fitted`` (every model fitted by name).
+    """
+    base = fitter.fit(())
+    current, chain, steps = base, [base], []
+    while True:
+        addable = fitter.addable(current.effects)
+        if not addable:
+            break
+        if current.misfit_p >= settings.alpha:
+            # nothing to explain: no option can be decisive; creep alone is fitted
+            # for the report (what it would change), nothing else is
+            addable = [e for e in addable if e == VISCOELASTIC_CREEP and not current.effects]
+            if not addable:
+                break
+        models = [fitter.fit(current.effects + (e,)) for e in addable]
+        options = [_option(m, current, settings) for m in models]
+        k = int(np.argmin([o["bic"] for o in options]))
+        best, chosen = models[k], options[k]
+        tied = [o["effects"][-1] for o in options
+                if o is not chosen and o["decisive"]
+                and o["bic"] - chosen["bic"] < settings.ambiguity_bic]
+        steps.append({"step": len(steps) + 1, "from": current.name,
+                      "from_misfit_p": current.misfit_p, "options": options,
+                      "added": chosen["effects"][-1] if chosen["decisive"] else None,
+                      "ambiguous_with": tied if chosen["decisive"] else []})
+        if not chosen["decisive"]:
+            break
+        current = best
+        chain.append(best)
+    removed = []
+    final = chain[-1]
+    for e in list(final.effects) if len(final.effects) > 1 else []:
+        if e not in final.effects:
+            continue
+        drop = {e, CREEP_SECOND_TERM} if e == VISCOELASTIC_CREEP else {e}
+        without = fitter.fit(tuple(x for x in final.effects if x not in drop))
+        d = final.bic - without.bic
+        if d > settings.delta_bic:
+            removed.append({"effect": e, "delta_bic_without": float(d)})
+            final = without
+    if removed:
+        chain.append(final)
+    return {"base": base, "final": final, "chain": chain, "steps": steps, "removed": removed,
+            "fitted": {m.name: m for m in fitter._cache.values()}}
+
+
+def cycle_pattern(data, fitted, sd_factor: float = 3.0) -> list:
+    """Words for a first cycle that departs from the later ones (preconditioning).
+
+    Per curve with two or more holds (``on`` phases), the mean residual of each
+    hold; the first departs when it differs from the later holds' mean by more
+    than ``sd_factor`` times the spread of the later holds (or their standard
+    error, whichever is larger) and by more than the noise sd.
+
+    Parameters
+    ----------
+    data : list of TimeFitData
+    fitted : list of ndarray
+        The final model's deflections (mm) per curve.
+
+    Returns
+    -------
+    list of str
+    """
+    out = []
+    for d, m in zip(data, fitted):
+        on = np.concatenate([[False], d.phase == "on", [False]]).astype(int)
+        edges = np.flatnonzero(np.diff(on))
+        holds = list(zip(edges[0::2], edges[1::2]))
+        if len(holds) < 2:
+            continue
+        r = 1e3 * (d.deflection_mm - np.asarray(m, dtype=float))
+        means = np.array([np.mean(r[a:b]) for a, b in holds])
+        later = means[1:]
+        se = float(np.mean([np.std(r[a:b]) / math.sqrt(max(b - a, 1)) for a, b in holds[1:]]))
+        spread = float(np.std(later)) if later.size > 1 else 0.0
+        gap = float(means[0] - later.mean())
+        if abs(gap) > sd_factor * max(spread, se) and abs(gap) > 1e3 * d.noise_sd_mm:
+            out.append(f"{d.label}: the first cycle departs from the later ones by "
+                       f"{gap:+.1f} µm in its hold (the later holds agree within "
+                       f"{max(spread, se):.1f} µm): the skin changes over the first cycle "
+                       "(preconditioning), which no model here holds")
+    return out
