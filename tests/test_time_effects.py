@@ -114,9 +114,27 @@ def test_creep_and_stiffening_are_both_named_with_gains_and_intervals(space,
 
 def test_creep_alone_is_not_given_an_elastic_effect(space, tmp_path):
     skin = Skin.two_layer(0.1, 0.005, spectrum=Prony([0.4], [0.3]))
-    r = diagnose_time_data(_skin_file(tmp_path / "creep.csv", skin), space, FAST)
+    r = diagnose_time_data(_skin_file(tmp_path / "creep.csv", skin, probes=(6.0,)), space,
+                           FAST)
     assert r["effects"] == [VISCOELASTIC_CREEP], r["summary"]
     assert r["creep_terms"] == 1 and not r["removed"]
+    # one aperture cannot tell which layer creeps, and says so
+    assert not r["creep_layers"]["tested"] and "one probe" in r["creep_layers"]["reason"]
+    assert "Which layer creeps: not tested" in r["summary"]
+
+
+def test_two_probes_tell_that_the_hypodermis_creeps(space, tmp_path):
+    skin = Skin.two_layer(0.08, 0.004, spectrum=Prony([1e-4], [0.3])).replace(
+        {"hypodermis.spectrum.g[0]": 1.0, "hypodermis.spectrum.tau_s[0]": 0.5})
+    r = diagnose_time_data(_skin_file(tmp_path / "h.csv", skin, probes=(2.0, 8.0)), space,
+                           FAST)
+    cl = r["creep_layers"]
+    assert r["effects"] == [VISCOELASTIC_CREEP], r["summary"]
+    assert cl["tested"] and cl["decisive"] and cl["creeping"] == "hypodermis", r["summary"]
+    g = cl["intervals"]["g_hypodermis"]
+    assert g["lower"] <= 1.0 <= g["upper"]
+    assert cl["intervals"]["g_dermis"]["upper"] < g["lower"]
+    assert cl["beta"]["2"] < 0.3 < 0.6 < cl["beta"]["8"]
 
 
 # --------------------------------------------------------------------- the rule alone

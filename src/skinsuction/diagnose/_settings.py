@@ -66,6 +66,9 @@ class Settings:
         removes the misfit is a detection of its own (its likelihood-ratio test of one
         extra parameter is the more powerful near the noise); the pattern test then
         only tells ``unexplained_misfit`` from ``neo_hookean_fits``.
+    layer_test : bool
+        On time curves of two apertures with creep named, test which layer creeps (a
+        spectrum per layer against one for both; two fits more).
     time_causes : list of str or None
         The elastic causes a time-curve diagnosis tries beside creep (their rays
         beside the scale-free space); None: every one there.
@@ -87,6 +90,7 @@ class Settings:
     cause_window_decades: float | None = 1.0
     pattern_gate: bool = False
     time_causes: tuple | None = None
+    layer_test: bool = True
 
     def __post_init__(self):
         if not 0 < self.alpha < 1:

@@ -195,7 +195,7 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
     from skinsuction.identify.time_curves import prepare_time_fit
     from skinsuction.provenance import collect
 
-    from ._time_effects import (CREEP_SECOND_TERM, EffectFitter, cycle_pattern,
+    from ._time_effects import (CREEP_SECOND_TERM, EffectFitter, cycle_pattern, layer_test,
                                 physical_effects, select_effects)
 
     settings = settings or Settings()
@@ -209,11 +209,23 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
     except IdentificationError as err:
         raise InputError(f"{data.path}: beyond the simulated space: {err}") from None
     base, final = sel["base"], sel["final"]
+    creep_layers = (layer_test(fitter, final, settings) if settings.layer_test
+                    else {"tested": False, "reason": "not asked (layer_test off)"})
     el, ve = _fit_json(base.fit, fd, "elastic"), _fit_json(visco.fit, fd, VISCOELASTIC_CREEP)
     for js in (el, ve):
         js["skin"] = _skin_of(js["parameters"], prep["geometry"], prep["space"].bottom)
     cause_of = {None: None, **{n: fitter.rays[n][fitter.probes[0]].cause
                                for n in fitter.causes}}
+    check = creep_layers.get("elastic_check")
+    if check is not None and not check["earns_its_place"]:
+        # the elastic effect was the shared spectrum's stand-in for a layer's own creep:
+        # the final model is the one without it (its spectrum per layer in creep_layers)
+        sel["removed"].append({"effect": check["effect"],
+                               "delta_bic_without": check["delta_bic_without"],
+                               "reason": "a spectrum per layer explains what it was added "
+                                         "for"})
+        final = fitter.fit(tuple(e for e in final.effects if e != check["effect"]))
+        sel["chain"].append(final)
     fin = _model_json(final, fd, prep, settings, cause_of[final.elastic_cause])
     effects = physical_effects(final.effects)
     named = effects[0] if effects else "none"
@@ -262,6 +274,7 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
                    **{n: {"hypothesis": c.hypothesis, "parameters": [c.symbol]}
                       for n, c in cause_of.items() if n is not None}},
         "steps": steps, "removed": sel["removed"], "chain": chain, "final": fin,
+        "creep_layers": creep_layers,
         "ambiguous_with": sorted({e for s in steps for e in s["ambiguous_with"]}),
         "elastic": el, "viscoelastic": ve,
         "gain": _gain(el, ve, fin if effects else ve),
@@ -360,8 +373,9 @@ def time_summary_text(report: dict) -> str:
                      f"BIC {opt['delta_bic']:+.1f}{tie}): "
                      f"{_params_text(m['parameters'], m['intervals'])}.")
     for r in report.get("removed", []):
-        lines.append(f"Removed {r['effect']}: it no longer earns its place in the final model "
-                     f"(BIC {r['delta_bic_without']:+.1f} without it).")
+        why = r.get("reason", "it no longer earns its place in the final model")
+        lines.append(f"Removed {r['effect']}: {why} (BIC {r['delta_bic_without']:+.1f} "
+                     "without it).")
     for label, names in (report.get("at_bound") or {}).items():
         lines.append(f"AT BOUND: the {label} fit's {', '.join(names)} at an edge of the space "
                      "or the spectrum (see the warnings): a bound, not an estimate.")
@@ -377,6 +391,17 @@ def time_summary_text(report: dict) -> str:
         if effects == [VISCOELASTIC_CREEP]:
             lines.append(f"cause {VISCOELASTIC_CREEP}: the skin creeps; the elastic model "
                          "misses it and a relaxation spectrum fits")
+    cl = report.get("creep_layers") or {}
+    if cl.get("tested"):
+        p, iv = cl["parameters"], cl["intervals"]
+        lines.append(f"Which layer creeps: {cl['creeping']} (a spectrum per layer, BIC "
+                     f"{cl['delta_bic']:+.1f} against one for both"
+                     + (", decisive" if cl["decisive"] else "") + "): dermis g = "
+                     f"{p['g_dermis'][0]:.3g} [{iv['g_dermis']['lower']:.3g}, "
+                     f"{iv['g_dermis']['upper']:.3g}], hypodermis g = {p['g_hypodermis'][0]:.3g} "
+                     f"[{iv['g_hypodermis']['lower']:.3g}, {iv['g_hypodermis']['upper']:.3g}].")
+    elif report.get("effects") and VISCOELASTIC_CREEP in report["effects"]:
+        lines.append(f"Which layer creeps: not tested: {cl.get('reason')}.")
     if report.get("beyond_space"):
         lines.append("verdict beyond_space: the model sits at an edge of the simulated space "
                      "(" + ", ".join(b["parameter"] for b in report["beyond_space"])

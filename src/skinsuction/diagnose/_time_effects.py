@@ -41,7 +41,7 @@ from ._creep import VISCOELASTIC_CREEP
 from ._stats import bic
 
 __all__ = ["CREEP_SECOND_TERM", "TimeModel", "EffectFitter", "select_effects", "model_name",
-           "cycle_pattern", "physical_effects"]
+           "cycle_pattern", "physical_effects", "layer_test"]
 
 #: Name of the model without effects.
 BASELINE_NAME = "neo_hookean"
@@ -300,3 +300,103 @@ def cycle_pattern(data, fitted, sd_factor: float = 3.0) -> list:
                        f"{max(spread, se):.1f} µm): the skin changes over the first cycle "
                        "(preconditioning), which no model here holds")
     return out
+
+
+def layer_test(fitter: EffectFitter, final: TimeModel, settings) -> dict:
+    """Which layer creeps: the final model's spectrum shared by both layers against one
+    spectrum per layer (one term each), both under the per-layer fast path's larger
+    model error (:data:`skinsuction.identify.MODEL_ERROR_LAYERS`).
+
+    Two probes of different apertures are needed: a small one sees mostly the dermis, a
+    large one the hypodermis too (the hypodermis's share of the compliance, ``beta``,
+    is reported per probe).  With one aperture the test is not run, and says why.
+
+    Parameters
+    ----------
+    fitter : EffectFitter
+    final : TimeModel
+        The selection's final model; it must hold creep.
+    settings : Settings
+
+    Returns
+    -------
+    dict
+        ``tested`` (bool), ``reason``; when tested: ``delta_bic`` (per layer minus
+        shared), ``decisive`` (the layers' spectra differ), ``creeping``
+        (``"dermis"`` or ``"hypodermis"``: its g's interval lies above 0.05 and the
+        other's below its own; ``"both"``: both above 0.05; else ``"cannot
+        tell"``), the
+        ``elastic_check`` (does the final model's elastic effect still earn its place
+        with a spectrum per layer?), the per-layer ``parameters`` and
+        ``intervals``, ``beta`` per probe, ``model_error``.
+    """
+    from skinsuction.identify import (MODEL_ERROR_LAYERS, TimeCurveModel, fit_time_model,
+                                      laplace_intervals)
+    from skinsuction.identify._time_fit import fit_data_of
+
+    if VISCOELASTIC_CREEP not in final.effects:
+        return {"tested": False, "reason": "no creep named"}
+    if len({d.probe_mm for d in fitter.data}) < 2:
+        return {"tested": False,
+                "reason": "one probe cannot tell which layer creeps: its curve sees one "
+                          "mix of the layers (measure a second aperture, e.g. 2 + 8 mm)"}
+    data = [fit_data_of(c, noise_sd_mm=d.noise_sd_mm, model_error=MODEL_ERROR_LAYERS)
+            for c, d in zip(fitter.prep["curves"], fitter.data)]
+    rays = final.rays
+    k0 = 2 + (final.elastic_cause is not None)
+    theta = np.asarray(final.fit.theta, dtype=float)
+    start = theta[:k0 + 2]  # the first (fastest) creep term of the final model
+    seed = np.random.SeedSequence(int(settings.seed), spawn_key=(99,))
+    s_shared, s_layers = seed.spawn(2)
+    shared = fit_time_model(rays, data, terms=1, seed=s_shared, repeats=settings.repeats,
+                            starts=[start])
+    layered_start = np.concatenate([shared.theta, shared.theta[k0:k0 + 2]])
+    layers = fit_time_model(rays, data, terms=1, seed=s_layers, repeats=settings.repeats,
+                            starts=[layered_start], layers=True)
+    b_shared = bic(shared.chi2, shared.n_params, shared.n_points)
+    b_layers = bic(layers.chi2, layers.n_params, layers.n_points)
+    delta = float(b_layers - b_shared)
+    iv = laplace_intervals(rays, data, layers, level=settings.level)
+    p = layers.parameters
+    model = TimeCurveModel(rays, data, 1, layers=True)
+    beta = {f"{d.probe_mm:g}": float(model.hypodermis_share(layers.theta[None], d.probe_mm,
+                                                            float(d.pressure_mbar.max()))[0])
+            for d in data}
+    decisive = bool(delta <= settings.delta_bic)  # the layers' spectra differ
+    # a layer creeps when its g's interval lies above 0.05 (5 % of its long-time
+    # modulus); one layer is named when it creeps and the other's interval lies below
+    # its own
+    gd, gh = iv["g_dermis"], iv["g_hypodermis"]
+    if gd["lower"] > 0.05 and gh["lower"] > 0.05:
+        creeping = "both"
+    elif gd["lower"] > 0.05 and gh["upper"] < gd["lower"]:
+        creeping = "dermis"
+    elif gh["lower"] > 0.05 and gd["upper"] < gh["lower"]:
+        creeping = "hypodermis"
+    else:
+        creeping = "cannot tell"
+    # does the elastic effect still earn its place once each layer has its spectrum?
+    elastic_check = None
+    cause = final.elastic_cause
+    if decisive and cause is not None:
+        nh = fitter.rays[None]
+        start_nh = np.delete(layers.theta, 2)
+        plain = fit_time_model(nh, data, terms=1, seed=seed.spawn(1)[0],
+                               repeats=settings.repeats, starts=[start_nh], layers=True)
+        d_plain = float(b_layers - bic(plain.chi2, plain.n_params, plain.n_points))
+        elastic_check = {"effect": cause, "delta_bic_without": d_plain,
+                         "earns_its_place": bool(d_plain <= settings.delta_bic),
+                         "without_it": {"chi2": float(plain.chi2),
+                                        "parameters": plain.parameters}}
+    return {"tested": True, "delta_bic": delta, "decisive": decisive, "creeping": creeping,
+            "elastic_check": elastic_check,
+            "parameters": {k: p[k] for k in ("g_dermis", "tau_s_dermis", "g_hypodermis",
+                                             "tau_s_hypodermis")},
+            "intervals": {k: iv[k] for k in ("g_dermis", "tau_dermis", "g_hypodermis",
+                                             "tau_hypodermis")},
+            "shared": {"chi2": float(shared.chi2), "bic": float(b_shared),
+                       "parameters": shared.parameters},
+            "chi2": float(layers.chi2), "bic": float(b_layers), "beta": beta,
+            "model_error": dict(MODEL_ERROR_LAYERS),
+            "reason": "a spectrum per layer against one for both, each under the per-layer "
+                      "fast path's model error (2 % of the curve; docs/effects.md)"}

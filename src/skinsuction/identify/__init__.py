@@ -72,7 +72,7 @@ from ._surrogate import (
     surrogate_deflection,
     write_surrogate_space,
 )
-from ._time_fit import TimeCurveModel, TimeFit, TimeFitData, fit_time_model
+from ._time_fit import MODEL_ERROR_LAYERS, TimeCurveModel, TimeFit, TimeFitData, fit_time_model
 from ._time_intervals import laplace_intervals, time_bound_flags
 from ._window_focusing import (
     IdentificationError,
@@ -105,6 +105,7 @@ __all__ = [
     "TimeFitData",
     "fit_time_model",
     "TimeCurveModel",
+    "MODEL_ERROR_LAYERS",
     "laplace_intervals",
     "time_bound_flags",
     "BOUND_FRACTION",

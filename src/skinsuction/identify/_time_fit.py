@@ -53,7 +53,7 @@ from ._time_model import (
     theta_names,
 )
 
-__all__ = ["MODEL_ERROR", "TIME_WF", "TIME_POLISH", "TimeFitData", "TimeFit", "TimeCurveModel",
+__all__ = ["MODEL_ERROR", "MODEL_ERROR_LAYERS", "STRAIN_SLOPE", "TIME_WF", "TIME_POLISH", "TimeFitData", "TimeFit", "TimeCurveModel",
            "TimeObjective", "evaluate_time_fit", "fit_data_of", "fit_time_model"]
 
 #: The fast path's model error as an sd, fraction of the curve's largest deflection,
@@ -64,6 +64,20 @@ __all__ = ["MODEL_ERROR", "TIME_WF", "TIME_POLISH", "TimeFitData", "TimeFit", "T
 #: (docs/viscoelasticity.md: on 0.02-0.03 % / 0.34 %; release 0.68 % / 2.27 %;
 #: off 0.22 % / 1.34 %; mode 2 0.03 % / 0.16 %).
 MODEL_ERROR = {"on": 0.001, "release": 0.01, "off": 0.004, "ramp": 0.001, "rest": 0.0}
+
+#: Growth of the fast path's model error with the strain of the curve, ``s = U / (a/2)``
+#: (the largest deflection over the aperture's radius): its error is the departure from
+#: linear theory, so it grows with the strain (docs/effects.md: release errors of
+#: 0.2-0.5 % of Uf at s < 0.1, 1-4 % at s = 0.15-0.35, on 2-8 mm probes).  The sd of a
+#: phase is ``max(MODEL_ERROR[phase], STRAIN_SLOPE[phase] * s)``: about 0.45 times the
+#: worst error measured at that strain.
+STRAIN_SLOPE = {"on": 0.01, "release": 0.054, "off": 0.03, "ramp": 0.005, "rest": 0.0}
+
+#: The model error of the per-layer fast path (:class:`TimeCurveModel` with
+#: ``layers=True``), fraction of the curve's largest deflection in every loaded phase:
+#: its measured error against FE time solves with a spectrum per layer is 0.4-2.8 %
+#: of Uf (docs/effects.md, "Which layer creeps").
+MODEL_ERROR_LAYERS = {"on": 0.02, "release": 0.02, "off": 0.02, "ramp": 0.02, "rest": 0.0}
 
 #: Seconds after a step's release counted as "release" (where Ur is read).
 RELEASE_S = 0.1
@@ -130,7 +144,8 @@ def fit_data_of(curve, *, noise_sd_mm: float | None = None, model_error: dict | 
     noise_sd_mm : float, optional
         Overrides the loader's noise estimate.
     model_error : dict, optional
-        Fractions per phase (default :data:`MODEL_ERROR`); ``{}``-like zeros for none.
+        Fractions per phase; default :data:`MODEL_ERROR`, raised with the curve's strain
+        (:data:`STRAIN_SLOPE`).
     phases : {"all", "on"}
         ``"on"``: only the points while the suction is on (and before it) are fitted.
 
@@ -140,7 +155,6 @@ def fit_data_of(curve, *, noise_sd_mm: float | None = None, model_error: dict | 
     """
     if phases not in ("all", "on"):
         raise ValueError(f"phases must be 'all' or 'on', not {phases!r}")
-    fractions = {**MODEL_ERROR, **(model_error or {})}
     p, note = clean_pressure(curve)
     d = np.asarray(curve.deflection_mm, dtype=float)
     phase = _phases(curve)
@@ -149,6 +163,13 @@ def fit_data_of(curve, *, noise_sd_mm: float | None = None, model_error: dict | 
         raise ValueError(f"{curve.label}: the noise sd must be positive (the curve shows "
                          "none: give it, --noise-um)")
     scale = float(np.percentile(np.abs(d), 99.5))
+    if model_error is None:
+        # the fast path's error grows with the strain (STRAIN_SLOPE)
+        strain = scale / (0.5 * float(curve.probe_mm))
+        fractions = {k: max(v, STRAIN_SLOPE.get(k, 0.0) * strain)
+                     for k, v in MODEL_ERROR.items()}
+    else:
+        fractions = {**MODEL_ERROR, **model_error}
     f = np.array([fractions[k] for k in phase], dtype=float)
     # the space's own accuracy target (0.2 % of M and 0.3 µm), as for pressure ramps
     from .measured_fit import MODEL_ERROR_MM, MODEL_ERROR_RELATIVE
@@ -182,10 +203,12 @@ class TimeCurveModel:
     cause).
     """
 
-    def __init__(self, rays: dict, data: list, terms: int):
+    def __init__(self, rays: dict, data: list, terms: int, layers: bool = False):
         if terms not in (0, 1, 2):
             raise ValueError(f"0, 1 or 2 Prony terms, not {terms}")
-        self.data, self.terms = list(data), int(terms)
+        if layers and terms != 1:
+            raise ValueError("a spectrum per layer has one term each (terms=1)")
+        self.data, self.terms, self.layers = list(data), int(terms), bool(layers)
         self.elastic = {}
         for p in sorted({d.probe_mm for d in self.data}):
             p_max = max(float(d.pressure_mbar.max()) for d in self.data if d.probe_mm == p)
@@ -198,20 +221,55 @@ class TimeCurveModel:
         lo = np.max([e.lower for e in self.elastic.values()], axis=0)
         hi = np.min([e.upper for e in self.elastic.values()], axis=0)
         self.k0 = lo.size
-        s_lo, s_hi = spectrum_bounds(self.terms)
+        s_lo, s_hi = spectrum_bounds(2 if self.layers else self.terms)
         self.lower = np.concatenate([lo, s_lo])
         self.upper = np.concatenate([hi, s_hi])
         self.d = self.lower.size
         self.names = theta_names(self.terms, self.cause)
+        if self.layers:
+            self.names = self.names[:self.k0] + ["log10 g_dermis", "log10 tau_dermis",
+                                                 "log10 g_hypodermis", "log10 tau_hypodermis"]
 
     def __call__(self, theta) -> list:
         """[(N, T_k) deflection in mm for each curve k]."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         k0, out = self.k0, []
         for d in self.data:
-            p_eff = effective_pressures(theta[:, k0:], d.time_s, d.pressure_mbar, d.breaks)
+            if self.layers:
+                p_eff = self._layer_pressures(theta, d)
+            else:
+                p_eff = effective_pressures(theta[:, k0:], d.time_s, d.pressure_mbar, d.breaks)
             out.append(self.elastic[d.probe_mm](theta[:, :k0], p_eff))
         return out
+
+    def hypodermis_share(self, theta, probe_mm: float, p_mbar: float) -> np.ndarray:
+        """beta (N,): the hypodermis's share of the compliance of the elastic curve at
+        ``p_mbar``: -d log M / d log X1h over d log M / d log p (the two sum to it by
+        the scaling law), clipped to [0, 1]."""
+        el, th = self.elastic[probe_mm], np.asarray(theta, dtype=float)[:, :self.k0]
+        h = 0.005  # in log10 units (1.2 %)
+        p0 = np.full((th.shape[0], 1), float(p_mbar))
+        with np.errstate(all="ignore"):
+            m0 = el(th, p0)[:, 0]
+            tr = th.copy()
+            step = np.where(tr[:, 1] + h <= self.upper[1], h, -h)
+            tr[:, 1] += step
+            w_h = -(np.log(el(tr, p0)[:, 0]) - np.log(m0)) / (step * math.log(10.0))
+            pp = p0 * 10.0 ** h
+            n = (np.log(el(th, pp)[:, 0]) - np.log(m0)) / (h * math.log(10.0))
+            beta = np.clip(w_h / n, 0.0, 1.0)
+        return np.where(np.isfinite(beta), beta, 0.5)
+
+    def _layer_pressures(self, theta, d) -> np.ndarray:
+        """The per-layer fast path's drive: ``(1 - beta) p_eff,dermis + beta p_eff,hypodermis``,
+        each layer's spectrum through its own creep function, weighed by the
+        hypodermis's share of the compliance at the curve's largest suction (exact for
+        one spectrum, and in the linear limit where one layer carries the compliance)."""
+        k0 = self.k0
+        pd_ = effective_pressures(theta[:, k0:k0 + 2], d.time_s, d.pressure_mbar, d.breaks)
+        ph = effective_pressures(theta[:, k0 + 2:k0 + 4], d.time_s, d.pressure_mbar, d.breaks)
+        beta = self.hypodermis_share(theta, d.probe_mm, float(d.pressure_mbar.max()))
+        return (1.0 - beta)[:, None] * pd_ + beta[:, None] * ph
 
     def cause_value(self, theta) -> float | None:
         """The cause's parameter at theta (e.g. X2d in MPa), None without a cause."""
@@ -224,6 +282,16 @@ class TimeCurveModel:
     def parameters(self, theta) -> dict:
         theta = np.asarray(theta, dtype=float).reshape(-1)
         x1d = 10.0 ** theta[0]
+        if self.layers:
+            k0 = self.k0
+            out = {"X1d": float(x1d), "X1h": float(x1d * 10.0 ** theta[1]), "g": [], "tau_s": [],
+                   "g_dermis": [float(10.0 ** theta[k0])],
+                   "tau_s_dermis": [float(10.0 ** theta[k0 + 1])],
+                   "g_hypodermis": [float(10.0 ** theta[k0 + 2])],
+                   "tau_s_hypodermis": [float(10.0 ** theta[k0 + 3])]}
+            if self.cause is not None:
+                out[self.cause.symbol] = self.cause_value(theta)
+            return out
         g, tau = prony_of(theta, self.k0)
         factor = 1.0 + sum(g)
         out = {"X1d": float(x1d), "X1h": float(x1d * 10.0 ** theta[1]), "g": g, "tau_s": tau,
@@ -283,6 +351,7 @@ class TimeFit:
     phase_chi2: list
     wf: dict = field(default_factory=dict)
     cause: str | None = None  # the elastic cause of the space fitted (None: neo-Hookean)
+    layers: bool = False  # a spectrum per layer (one term each)
 
     @property
     def finite(self) -> bool:
@@ -304,7 +373,8 @@ def evaluate_time_fit(model: TimeCurveModel, theta, wf=None) -> TimeFit:
     -------
     TimeFit
     """
-    theta = sort_terms(theta, model.k0)
+    theta = (np.asarray(theta, dtype=float).reshape(-1) if model.layers
+             else sort_terms(theta, model.k0))
     curves = [m[0] for m in model(theta[None, :])]
     chi2, fitted, res, per_phase = 0.0, [], [], []
     for d, m in zip(model.data, curves):
@@ -320,12 +390,12 @@ def evaluate_time_fit(model: TimeCurveModel, theta, wf=None) -> TimeFit:
     n = sum(d.n for d in model.data)
     return TimeFit(model.terms, theta, model.parameters(theta), chi2, n, model.d, fitted, res,
                    per_phase, dict(wf or {}),
-                   None if model.cause is None else model.cause.name)
+                   None if model.cause is None else model.cause.name, model.layers)
 
 
 def fit_time_model(rays: dict, data: list, *, terms: int = 1, seed=0, repeats: int = 2,
                    window_focusing_options: dict | None = None, starts=(),
-                   polish: bool = True) -> TimeFit:
+                   polish: bool = True, layers: bool = False) -> TimeFit:
     """Fit the model with ``terms`` Prony terms (0: elastic) to the curves ``data``.
 
     Parameters
@@ -345,6 +415,10 @@ def fit_time_model(rays: dict, data: list, *, terms: int = 1, seed=0, repeats: i
         Extra starting points for the polish (e.g. a nested model's fit).
     polish : bool
         Polish the two best candidates (:data:`TIME_POLISH`).
+    layers : bool
+        A spectrum per layer, one term each (``terms=1``): the per-layer fast path of
+        :class:`TimeCurveModel`, an approximation whose error
+        (:data:`MODEL_ERROR_LAYERS`) the data's sd must carry.
 
     Returns
     -------
@@ -355,7 +429,7 @@ def fit_time_model(rays: dict, data: list, *, terms: int = 1, seed=0, repeats: i
     IdentificationError
         When no candidate of the space reproduces the curves.
     """
-    model = TimeCurveModel(rays, data, terms)
+    model = TimeCurveModel(rays, data, terms, layers)
     wf = {**TIME_WF, **(window_focusing_options or {})}
     fit = repeated_fit(TimeObjective(model), repeats=repeats, seed=seed, starts=starts,
                        focus_options=wf, polish_best=2 if polish else 0,

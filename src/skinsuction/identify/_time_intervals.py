@@ -139,7 +139,9 @@ def systematic_basis(data: TimeFitData, degree: int = SYSTEMATIC_DEGREE, fitted_
     if fitted_mm is not None:
         rc, rvar = rounding_terms(data, fitted_mm)
         cols += list(rc.T)
-        noise2 = max(noise2 - rvar, 0.0)
+        # a floor: with the rounding taking all of the noise, a point at rest (no model
+        # error there) would get no independent variance and break the decorrelation
+        noise2 = max(noise2 - rvar, 0.01 * data.noise_sd_mm ** 2)
     B = np.column_stack(cols)[data.used]
     D = (noise2 + MODEL_ERROR_MM ** 2 * (ph != "rest"))[data.used]
     return B, D
@@ -240,6 +242,13 @@ def _log_forms(theta, terms: int, k0: int = 2) -> dict:
     return forms
 
 
+def _layer_forms(theta, k0: int) -> dict:
+    """The forms of a fit with a spectrum per layer (one term each)."""
+    e = np.eye(theta.size)
+    return {"X1d": e[0], "X1h": e[0] + e[1], "g_dermis": e[k0], "tau_dermis": e[k0 + 1],
+            "g_hypodermis": e[k0 + 2], "tau_hypodermis": e[k0 + 3]}
+
+
 def _form_interval(name, a, theta, cov, q, lo, hi, ok, k0: int = 2) -> dict:
     """The interval of one form: centre +- sqrt(q a^T C a), cut at the box (open there)."""
     centre = float(a @ theta) if not name.endswith("instantaneous") else \
@@ -331,7 +340,7 @@ def laplace_intervals(rays: dict, data: list, fit: TimeFit, *, level: float = 0.
     dict
         JSON-able, the shape of :meth:`LikelihoodIntervals.to_dict`.
     """
-    model = TimeCurveModel(rays, data, fit.terms)
+    model = TimeCurveModel(rays, data, fit.terms, getattr(fit, "layers", False))
     obj = TimeObjective(model)
     theta = np.asarray(fit.theta, dtype=float)
     d, n = theta.size, obj.n
@@ -350,7 +359,8 @@ def laplace_intervals(rays: dict, data: list, fit: TimeFit, *, level: float = 0.
                      "are open on that side")
     scale = misfit_scale(fit.chi2, max(n - d, 1))
     q = interval_threshold(level) * scale
-    forms = _log_forms(theta, fit.terms, model.k0)
+    forms = (_layer_forms(theta, model.k0) if model.layers
+             else _log_forms(theta, fit.terms, model.k0))
     out = {name: _form_interval(name, a, theta, cov, q, lo, hi, ok, model.k0)
            for name, a in forms.items()}
     if model.cause is not None:
@@ -393,13 +403,15 @@ def time_bound_flags(rays: dict, data: list, fit: TimeFit, config_keys=None) -> 
     dict
         The flags of :func:`skinsuction.identify.bound_flags` by parameter.
     """
-    model = TimeCurveModel(rays, data, fit.terms)
+    model = TimeCurveModel(rays, data, fit.terms, getattr(fit, "layers", False))
     obj = TimeObjective(model)
     theta = np.asarray(fit.theta, dtype=float)
     cause = [] if model.cause is None else [model.cause.symbol]
-    names = (["X1d", "X1h"] + cause
-             + [f"{k}_{i}" for i in range(1, fit.terms + 1) for k in ("g", "tau")])
-    kinds = ["log", "log"] + ["axis"] * (len(cause) + 2 * fit.terms)
+    spectrum = ([f"{k}_{i}" for i in range(1, fit.terms + 1) for k in ("g", "tau")]
+                if not model.layers else
+                ["g_dermis", "tau_dermis", "g_hypodermis", "tau_hypodermis"])
+    names = ["X1d", "X1h"] + cause + spectrum
+    kinds = ["log", "log"] + ["axis"] * (len(cause) + len(spectrum))
     keys = list(config_keys or [(None, None)] * 2)[:2]
     if cause:
         keys.append((f"scale_free_space.causes.{model.cause.name}.nodes",) * 2)

@@ -341,7 +341,7 @@ def _fit_quality(curves, fit_data, fit):
                 "points": n, "chi2": chi2, "reduced_chi2": chi2 / n if n else None,
                 "rms_um": float(np.sqrt(np.mean(res[sel] ** 2))) if sel.any() else None,
                 "max_abs_um": float(np.max(np.abs(res[sel]))) if sel.any() else None,
-                "model_error_sd_um": 1e3 * MODEL_ERROR[ph] * d.scale_mm,
+                "model_error_sd_um": 1e3 * (d.model_error or MODEL_ERROR)[ph] * d.scale_mm,
                 "fitted": bool(d.used[sel].any())}
         quality.append(rec)
         fitted[c.label] = {"probe_mm": c.probe_mm, "time_s": d.time_s.tolist(),
@@ -393,7 +393,12 @@ def _time_identification(data, prep, fit, intervals, flags, settings,
         noise=noise,
         likelihood={"sd": "sqrt(noise^2 + (model_error[phase] * U)^2), U the curve's "
                           "largest deflection",
-                    "model_error_fraction": dict(MODEL_ERROR), "phases_fitted": phases,
+                    "model_error_fraction": {d.label: dict(d.model_error or MODEL_ERROR)
+                                             for d in fit_data},
+                    "model_error_rule": "max(MODEL_ERROR[phase], STRAIN_SLOPE[phase] * U / "
+                                        "(aperture / 2)): the fast path's measured error "
+                                        "grows with the strain",
+                    "phases_fitted": phases,
                     "pressure": [n for d in fit_data for n in d.notes]},
         space={**space.info, "bottom": space.bottom, "kind": "scale_free",
                "x1d_range_mpa": list(spec.x1d_range), "load_max": spec.load_max,
