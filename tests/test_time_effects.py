@@ -226,3 +226,43 @@ def test_identify_fits_an_effect_with_the_spectrum(creep_and_stiffening, tmp_pat
     assert main(["identify", str(creep_and_stiffening.path), "--effect", "nonsense",
                  "--out", str(tmp_path / "x")]) != 0
     assert "nonsense" in capsys.readouterr().err
+
+
+def test_the_confusion_summary_counts_what_it_says():
+    import pandas as pd
+
+    from skinsuction.evaluation import effects_confusion_markdown, effects_confusion_summary
+
+    base = {"design": "d", "error": None, "x1d": 0.1, "g": 0.5, "tau_s": 0.3,
+            "x2_over_x1d": 5.0, "fit_x1d": 0.1, "fit_x2d": 0.55, "fit_g": 0.5,
+            "fit_tau_s": 0.3, "diagnosis_cpu_s": 1.0, "layers_tested": False,
+            "creep_layer": "both", "creeping": None}
+    rows = [
+        # a pair named whole
+        {**base, "truth": f"{VISCOELASTIC_CREEP}+{STIFF}", "named": f"{VISCOELASTIC_CREEP},{STIFF}",
+         "ambiguous_with": "", f"detectable_{VISCOELASTIC_CREEP}": True,
+         f"detectable_{STIFF}": True},
+        # a pair whose stiffening was named pre-tension, tied: wrong but tied
+        {**base, "truth": f"{VISCOELASTIC_CREEP}+{STIFF}",
+         "named": f"{VISCOELASTIC_CREEP},pre_tension", "ambiguous_with": STIFF,
+         f"detectable_{VISCOELASTIC_CREEP}": True, f"detectable_{STIFF}": True},
+        # creep named with a wrong thickness, not tied
+        {**base, "truth": VISCOELASTIC_CREEP, "named": f"{VISCOELASTIC_CREEP},dermis_thickness",
+         "ambiguous_with": "", f"detectable_{VISCOELASTIC_CREEP}": True},
+        # an elastic draw given creep
+        {**base, "truth": "none", "named": VISCOELASTIC_CREEP, "ambiguous_with": ""},
+        # a failed FE solve: counted as failed, not dropped
+        {**base, "truth": "none", "error": "RuntimeError: FE stopped"},
+    ]
+    s = effects_confusion_summary(pd.DataFrame(rows))
+    d = s["d"]
+    assert s["failed"] == 1 and d["draws"] == 4
+    assert d["effects"][VISCOELASTIC_CREEP] == {"with_effect": 3, "detectable": 3, "named": 3,
+                                                "right_or_tied": 3}
+    assert d["effects"][STIFF] == {"with_effect": 2, "detectable": 2, "named": 1,
+                                   "right_or_tied": 2}
+    assert d["pairs"] == [1, 2] and d["false_effect"] == [1, 1]
+    assert d["wrong_not_tied"] == [1, 3]
+    assert d["median_error_pct"]["X2d"] == [pytest.approx(10.0), 1]
+    assert "| strain_stiffening | 2/2 | 1/2 | 2/2 |" in effects_confusion_markdown(
+        pd.DataFrame(rows))

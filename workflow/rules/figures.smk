@@ -394,6 +394,45 @@ if "diagnosis" in config:
             script:
                 "../scripts/published_ranges.py"
 
+    if "time_effects_confusion" in DG:
+        # Opt-in (not in the default target): FE time solves and a diagnosis effect by
+        # effect per draw and design, about 15 min on 2 cores for 10 per class.
+
+        rule time_effects_confusion:
+            """Single and paired effects in Cutometer time curves, named effect by effect:
+            FE mode-1 draws of each class under each design, diagnosed."""
+            output:
+                draws="results/tables/time_effects_confusion.csv",
+                summary=report(
+                    "results/tables/time_effects_confusion.md",
+                    caption="../report/time_effects_confusion.rst",
+                    category="Diagnosis",
+                    labels={"table": "effects in time curves"},
+                ),
+                png=report(
+                    "results/figures/time_effects_confusion.png",
+                    caption="../report/time_effects_confusion.rst",
+                    category="Diagnosis",
+                    labels={"figure": "effects in time curves"},
+                ),
+                pdf="results/figures/time_effects_confusion.pdf",
+            log:
+                "logs/diagnosis/time_effects_confusion.log",
+            benchmark:
+                "results/benchmarks/diagnosis/time_effects_confusion.tsv"
+            params:
+                settings=DG["time_effects_confusion"],
+                code=code_hash("evaluation", "diagnose", "identify", "viscoelastic", "model",
+                               "measured", "figures", *SPACE_CODE),
+            threads: 2
+            resources:
+                mem_mb=3000,
+                runtime=60,
+            conda:
+                "../envs/skinsuction.yaml"
+            script:
+                "../scripts/time_effects_confusion.py"
+
     if "confusion_given_layers" in DG:
         # Opt-in (not in the default target): every draw has its own dermis, and every
         # candidate cause's rays are solved on demand at it and at +-1 sd of it (cut to

@@ -47,6 +47,7 @@ from ._fit import Fit, FitData, ModelCurves, fit_model, nested_start
 from ._report import write_report
 from ._stats import bic, misfit_test, noise_from_differences, noise_from_replicates
 from ._time import VISCOELASTIC_CREEP, diagnose_time_data, diagnose_time_file, write_time_report
+from ._time_effects import CREEP_SECOND_TERM, EffectFitter, layer_test, select_effects
 
 __all__ = [
     "BASELINE", "NONE", "Cause", "DEFAULT_CAUSES", "default_registry", "registry_from_config",
@@ -56,4 +57,6 @@ __all__ = [
     "write_report",
     "bic", "misfit_test", "noise_from_differences", "noise_from_replicates",
     "VISCOELASTIC_CREEP", "diagnose_time_data", "diagnose_time_file", "write_time_report",
+    # time curves, effect by effect
+    "CREEP_SECOND_TERM", "EffectFitter", "select_effects", "layer_test",
 ]

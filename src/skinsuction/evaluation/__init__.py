@@ -50,6 +50,16 @@ from ._confusion import (
     run_draw,
     run_draws,
 )
+from ._effects import (
+    EFFECT_CLASSES,
+    EFFECT_DESIGNS,
+    diagnose_effect_draw,
+    draw_effects,
+    effects_confusion_markdown,
+    effects_confusion_study,
+    effects_confusion_summary,
+    effects_skin,
+)
 from ._published import (
     FACE_PROTOCOL,
     PUBLISHED_FACE,
@@ -85,6 +95,9 @@ __all__ = [
     # the published Cutometer values: creep alone, or with stiffening
     "PUBLISHED_FACE", "FACE_PROTOCOL", "box_distance", "evaluate_draw", "closest_skin",
     "published_ranges_study", "published_ranges_summary", "published_ranges_markdown",
+    # single and paired effects in time curves
+    "EFFECT_CLASSES", "EFFECT_DESIGNS", "draw_effects", "effects_skin", "diagnose_effect_draw",
+    "effects_confusion_study", "effects_confusion_summary", "effects_confusion_markdown",
     # the diagnosis over the physiological domain
     "WIDE_DOMAIN", "draw_wide", "domain_from_config", "given_keywords", "initial_stress_kpa",
     "run_draw", "run_draws",
