@@ -266,3 +266,21 @@ def test_the_confusion_summary_counts_what_it_says():
     assert d["median_error_pct"]["X2d"] == [pytest.approx(10.0), 1]
     assert "| strain_stiffening | 2/2 | 1/2 | 2/2 |" in effects_confusion_markdown(
         pd.DataFrame(rows))
+
+
+def test_a_study_names_both_effects_of_a_mode1_file(creep_and_stiffening, tmp_path):
+    import shutil
+
+    import pandas as pd
+
+    from skinsuction.cli import main
+
+    folder = tmp_path / "study"
+    folder.mkdir()
+    shutil.copy(creep_and_stiffening.path, folder / "pair.csv")
+    out = tmp_path / "out"
+    assert main(["study", str(folder), "--out", str(out), "--repeats", "1"]) == 0
+    (row,) = pd.read_parquet(out / "curves.parquet").to_dict("records")
+    assert row["effects"] == f"{VISCOELASTIC_CREEP},{STIFF}", row["warnings"]
+    assert row["cause"] == VISCOELASTIC_CREEP and row["extra_parameter"] == "X2d"
+    assert row["extra_lower"] <= 0.5 <= row["extra_upper"]
