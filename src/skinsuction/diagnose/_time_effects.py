@@ -302,6 +302,42 @@ def cycle_pattern(data, fitted, sd_factor: float = 3.0) -> list:
     return out
 
 
+#: How much more one layer's g must be than the other's to name that layer alone.
+LAYER_RATIO = 3.0
+
+
+def _creeping(iv: dict, decisive: bool) -> str:
+    """The layer test's answer from the per-layer g intervals.
+
+    ``"dermis"`` or ``"hypodermis"``: the spectra differ (``decisive``), that layer's g
+    exceeds 0.05 at its lower end (or its estimate is at the spectrum's upper edge) and
+    the other's estimate by :data:`LAYER_RATIO`; ``"both"``: both g's lower ends exceed
+    0.05; else ``"cannot tell"``.
+
+    >>> iv = lambda e, lo, hi, up=False: {"estimate": e, "lower": lo, "upper": hi,
+    ...                                   "upper_open": up}
+    >>> _creeping({"g_dermis": iv(0.03, 0.001, 0.8), "g_hypodermis": iv(5, 0.001, 5, True)},
+    ...           True)
+    'hypodermis'
+    >>> _creeping({"g_dermis": iv(0.4, 0.2, 0.6), "g_hypodermis": iv(0.5, 0.3, 0.8)}, True)
+    'both'
+    >>> _creeping({"g_dermis": iv(0.03, 0.001, 0.8), "g_hypodermis": iv(5, 0.001, 5, True)},
+    ...           False)
+    'cannot tell'
+    """
+    gd, gh = iv["g_dermis"], iv["g_hypodermis"]
+
+    def creeps(g):
+        return g["lower"] > 0.05 or (g.get("upper_open") and g["estimate"] > 0.05)
+
+    for name, g, other in (("dermis", gd, gh), ("hypodermis", gh, gd)):
+        if decisive and creeps(g) and g["estimate"] > LAYER_RATIO * other["estimate"]:
+            return name
+    if gd["lower"] > 0.05 and gh["lower"] > 0.05:
+        return "both"
+    return "cannot tell"
+
+
 def layer_test(fitter: EffectFitter, final: TimeModel, settings) -> dict:
     """Which layer creeps: the final model's spectrum shared by both layers against one
     spectrum per layer (one term each), both under the per-layer fast path's larger
@@ -323,9 +359,7 @@ def layer_test(fitter: EffectFitter, final: TimeModel, settings) -> dict:
     dict
         ``tested`` (bool), ``reason``; when tested: ``delta_bic`` (per layer minus
         shared), ``decisive`` (the layers' spectra differ), ``creeping``
-        (``"dermis"`` or ``"hypodermis"``: its g's interval lies above 0.05 and the
-        other's below its own; ``"both"``: both above 0.05; else ``"cannot
-        tell"``), the
+        (:func:`_creeping`), the
         ``elastic_check`` (does the final model's elastic effect still earn its place
         with a spectrum per layer?), the per-layer ``parameters`` and
         ``intervals``, ``beta`` per probe, ``model_error``.
@@ -363,18 +397,7 @@ def layer_test(fitter: EffectFitter, final: TimeModel, settings) -> dict:
                                                             float(d.pressure_mbar.max()))[0])
             for d in data}
     decisive = bool(delta <= settings.delta_bic)  # the layers' spectra differ
-    # a layer creeps when its g's interval lies above 0.05 (5 % of its long-time
-    # modulus); one layer is named when it creeps and the other's interval lies below
-    # its own
-    gd, gh = iv["g_dermis"], iv["g_hypodermis"]
-    if gd["lower"] > 0.05 and gh["lower"] > 0.05:
-        creeping = "both"
-    elif gd["lower"] > 0.05 and gh["upper"] < gd["lower"]:
-        creeping = "dermis"
-    elif gh["lower"] > 0.05 and gd["upper"] < gh["lower"]:
-        creeping = "hypodermis"
-    else:
-        creeping = "cannot tell"
+    creeping = _creeping(iv, decisive)
     # does the elastic effect still earn its place once each layer has its spectrum?
     elastic_check = None
     cause = final.elastic_cause

@@ -132,6 +132,9 @@ def diagnose_effect_draw(job) -> dict:
                     "creep_terms": r["creep_terms"], "noise_um": sd_um,
                     "layers_tested": bool(cl.get("tested")), "creeping": cl.get("creeping"),
                     "layers_delta_bic": cl.get("delta_bic"),
+                    "g_dermis": ((cl.get("parameters") or {}).get("g_dermis") or [None])[0],
+                    "g_hypodermis": ((cl.get("parameters") or {}).get("g_hypodermis")
+                                     or [None])[0],
                     "fit_x1d": fp["X1d"], "fit_x2d": fp.get("X2d"),
                     "fit_lambda0": fp.get("lambda0"),
                     "fit_g": (fp.get("g") or [None])[-1],
