@@ -5,7 +5,11 @@ from skinsuction.jobs import job, write_table
 
 # one process per thread, each with single-threaded BLAS/OpenMP pools
 with job(snakemake.log[0], threads=1):
-    from skinsuction.evaluation import effects_confusion_markdown, effects_confusion_study
+    from skinsuction.evaluation import (
+        effects_confusion_markdown,
+        effects_confusion_study,
+        effects_confusion_summary,
+    )
     from skinsuction.figures.effects import plot_effects_confusion
     from skinsuction.results import write_text
 
@@ -14,4 +18,5 @@ with job(snakemake.log[0], threads=1):
                                     processes=snakemake.threads)
     write_table(frame, snakemake.output.draws)
     write_text(snakemake.output.summary, effects_confusion_markdown(frame))
-    plot_effects_confusion(frame, snakemake.output.png, snakemake.output.pdf)
+    plot_effects_confusion(effects_confusion_summary(frame), snakemake.output.png,
+                           snakemake.output.pdf)

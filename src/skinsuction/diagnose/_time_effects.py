@@ -364,9 +364,8 @@ def layer_test(fitter: EffectFitter, final: TimeModel, settings) -> dict:
         with a spectrum per layer?), the per-layer ``parameters`` and
         ``intervals``, ``beta`` per probe, ``model_error``.
     """
-    from skinsuction.identify import (MODEL_ERROR_LAYERS, TimeCurveModel, fit_time_model,
-                                      laplace_intervals)
-    from skinsuction.identify._time_fit import fit_data_of
+    from skinsuction.identify import (MODEL_ERROR_LAYERS, TimeCurveModel, fit_data_of,
+                                      fit_time_model, laplace_intervals)
 
     if VISCOELASTIC_CREEP not in final.effects:
         return {"tested": False, "reason": "no creep named"}

@@ -3,7 +3,7 @@
 One panel per design: for each effect, the fraction of the draws where it is
 detectable that name it (dark) and that name it or tie it (light), with the counts;
 the draws with a wrong effect not tied and the elastic draws with a false effect as
-the last two bars (:func:`skinsuction.evaluation.effects_confusion_study`).
+the last two bars (the summary of :func:`skinsuction.evaluation.effects_confusion_summary`).
 """
 
 from __future__ import annotations
@@ -15,13 +15,13 @@ from ._style import WIDTH_IN, plt, save, style
 __all__ = ["plot_effects_confusion"]
 
 
-def plot_effects_confusion(frame, *paths):
+def plot_effects_confusion(summary: dict, *paths):
     """Draw the study's rates.
 
     Parameters
     ----------
-    frame : pandas.DataFrame
-        Rows of :func:`skinsuction.evaluation.effects_confusion_study`.
+    summary : dict
+        :func:`skinsuction.evaluation.effects_confusion_summary` of the study's rows.
     *paths : path-like
         Where to save the figure.
 
@@ -29,9 +29,7 @@ def plot_effects_confusion(frame, *paths):
     -------
     matplotlib.figure.Figure
     """
-    from skinsuction.evaluation import effects_confusion_summary
-
-    summary = {k: v for k, v in effects_confusion_summary(frame).items() if k != "failed"}
+    summary = {k: v for k, v in summary.items() if k != "failed"}
     with style():
         fig, axes = plt.subplots(1, max(len(summary), 1), figsize=(WIDTH_IN, 0.42 * WIDTH_IN),
                                  constrained_layout=True, squeeze=False, sharey=True)

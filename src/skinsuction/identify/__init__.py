@@ -72,7 +72,8 @@ from ._surrogate import (
     surrogate_deflection,
     write_surrogate_space,
 )
-from ._time_fit import MODEL_ERROR_LAYERS, TimeCurveModel, TimeFit, TimeFitData, fit_time_model
+from ._time_fit import (MODEL_ERROR_LAYERS, TimeCurveModel, TimeFit, TimeFitData, fit_data_of,
+                        fit_time_model)
 from ._time_intervals import laplace_intervals, time_bound_flags
 from ._window_focusing import (
     IdentificationError,
@@ -106,6 +107,7 @@ __all__ = [
     "fit_time_model",
     "TimeCurveModel",
     "MODEL_ERROR_LAYERS",
+    "fit_data_of",
     "laplace_intervals",
     "time_bound_flags",
     "BOUND_FRACTION",
