@@ -42,8 +42,7 @@ def draw(rng):
 
 def main():
     from skinsuction.evaluation import mode1_suction, virtual_skin_curve, write_time_csv
-    from skinsuction.identify import TimeCurveModel
-    from skinsuction.identify._time_fit import fit_data_of
+    from skinsuction.identify import TimeCurveModel, fit_data_of
     from skinsuction.measured import load_time_curves
     from skinsuction.model import Skin
     from skinsuction.space import load_space

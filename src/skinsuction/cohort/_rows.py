@@ -267,9 +267,11 @@ def _time_diagnosis_columns(diag: dict) -> dict:
            "verdict": diag["verdict"],
            "ambiguous_with": ",".join(diag.get("ambiguous_with") or []),
            "delta_bic": diag["gain"]["delta_bic"]}
+    from skinsuction.diagnose import VISCOELASTIC_CREEP
+
     final = diag.get("final") or {}
     for name in diag.get("effects") or []:
-        if name == "viscoelastic_creep":  # its spectrum has columns of its own
+        if name == VISCOELASTIC_CREEP:  # its spectrum has columns of its own
             continue
         cause = (diag.get("causes") or {}).get(name) or {}
         symbol = (cause.get("parameters") or [None])[0]

@@ -28,7 +28,6 @@ elastic curve: :func:`untestable_on_ramps` says so in every ramp diagnosis.
 from __future__ import annotations
 
 import datetime as _dt
-import math
 
 import numpy as np
 from scipy import stats
@@ -40,9 +39,10 @@ from ._diagnose import Settings
 from ._stats import bic
 
 __all__ = ["VISCOELASTIC_CREEP", "diagnose_time_data", "diagnose_time_file",
-           "untestable_on_ramps", "time_summary_text"]
+           "untestable_on_ramps", "time_summary_text", "write_time_report"]
 
 from ._creep import HYPOTHESIS, VISCOELASTIC_CREEP, untestable_on_ramps
+from ._time_report import time_summary_text, write_time_report
 
 
 def _phase_table(fit, data) -> list:
@@ -134,7 +134,7 @@ def _misfit_left(model, fd, settings) -> list:
     return out
 
 
-def _causes_tried(space, settings, thickness_given) -> list:
+def _causes_tried(space, settings) -> list:
     """The elastic causes a time diagnosis tries (Settings.time_causes, else all)."""
     names = space.cause_names()
     wanted = names if settings.time_causes is None else list(settings.time_causes)
@@ -190,32 +190,51 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
         ``patterns`` (what no model explains, in words), ``summary``,
         ``warnings``, ``geometry``, ``input``.
     """
-    from skinsuction import __version__
-    from skinsuction.identify import IdentificationError, laplace_intervals
     from skinsuction.identify.time_curves import prepare_time_fit
-    from skinsuction.provenance import collect
-
-    from ._time_effects import (CREEP_SECOND_TERM, EffectFitter, cycle_pattern, layer_test,
-                                physical_effects, select_effects)
 
     settings = settings or Settings()
     prep = prepare_time_fit(data, space, probes=probes, curve=curve,
                             noise_um=settings.noise_um, thickness=thickness)
-    fd, warnings = prep["data"], list(prep["warnings"])
+    run = _select(data, prep, settings)
+    judged = _judge(run, prep["data"], settings, list(prep["warnings"]))
+    report = _assemble(data, prep, settings, run, judged)
+    report["summary"] = time_summary_text(report)
+    return report
+
+
+class _Run:
+    """The fits of one diagnosis: the selection, creep alone, the layer test, and the
+    JSON of each model (cached: a model's intervals are computed once)."""
+
+    def __init__(self, fitter, sel, visco, creep_layers, prep, settings):
+        self.fitter, self.sel, self.visco, self.creep_layers = fitter, sel, visco, creep_layers
+        self.base, self.final = sel["base"], sel["final"]
+        self.cause_of = {None: None, **{n: fitter.rays[n][fitter.probes[0]].cause
+                                        for n in fitter.causes}}
+        self._prep, self._settings, self._json = prep, settings, {}
+
+    def model_json(self, m) -> dict:
+        if m.name not in self._json:
+            self._json[m.name] = _model_json(m, self._prep["data"], self._prep, self._settings,
+                                             self.cause_of[m.elastic_cause])
+        return self._json[m.name]
+
+
+def _select(data, prep, settings) -> _Run:
+    """The effects (:func:`select_effects`), creep alone, which layer creeps, and an
+    elastic effect dropped when a spectrum per layer explains it."""
+    from skinsuction.identify import IdentificationError
+
+    from ._time_effects import EffectFitter, layer_test, select_effects
+
     try:
-        fitter = EffectFitter(prep, settings, _causes_tried(prep["space"], settings, thickness))
+        fitter = EffectFitter(prep, settings, _causes_tried(prep["space"], settings))
         sel = select_effects(fitter, settings)
         visco = fitter.fit((VISCOELASTIC_CREEP,))
     except IdentificationError as err:
         raise InputError(f"{data.path}: beyond the simulated space: {err}") from None
-    base, final = sel["base"], sel["final"]
-    creep_layers = (layer_test(fitter, final, settings) if settings.layer_test
+    creep_layers = (layer_test(fitter, sel["final"], settings) if settings.layer_test
                     else {"tested": False, "reason": "not asked (layer_test off)"})
-    el, ve = _fit_json(base.fit, fd, "elastic"), _fit_json(visco.fit, fd, VISCOELASTIC_CREEP)
-    for js in (el, ve):
-        js["skin"] = _skin_of(js["parameters"], prep["geometry"], prep["space"].bottom)
-    cause_of = {None: None, **{n: fitter.rays[n][fitter.probes[0]].cause
-                               for n in fitter.causes}}
     check = creep_layers.get("elastic_check")
     if check is not None and not check["earns_its_place"]:
         # the elastic effect was the shared spectrum's stand-in for a layer's own creep:
@@ -224,15 +243,23 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
                                "delta_bic_without": check["delta_bic_without"],
                                "reason": "a spectrum per layer explains what it was added "
                                          "for"})
-        final = fitter.fit(tuple(e for e in final.effects if e != check["effect"]))
-        sel["chain"].append(final)
-    fin = _model_json(final, fd, prep, settings, cause_of[final.elastic_cause])
+        sel["final"] = fitter.fit(tuple(e for e in sel["final"].effects
+                                        if e != check["effect"]))
+        sel["chain"].append(sel["final"])
+    return _Run(fitter, sel, visco, creep_layers, prep, settings)
+
+
+def _judge(run: _Run, fd, settings, warnings) -> dict:
+    """The verdict, the edges, what is left unexplained, and the warnings."""
+    from ._time_effects import cycle_pattern, physical_effects
+
+    base, visco, final = run.base, run.visco, run.final
+    el, ve = _fit_json(base.fit, fd, "elastic"), _fit_json(visco.fit, fd, VISCOELASTIC_CREEP)
+    fin = run.model_json(final)
     effects = physical_effects(final.effects)
-    named = effects[0] if effects else "none"
     misfit = el["misfit_p"] < settings.alpha
     verdict = ("cause_found" if effects else
                "unexplained_misfit" if misfit else "neo_hookean_fits")
-    intervals = laplace_intervals(visco.rays, fd, visco.fit, level=settings.level)
     at_bound = _bound_flags(fd, (("elastic", base, el), ("viscoelastic", visco, ve))
                             + ((("final", final, fin),) if effects else ()), warnings)
     # never a silent bound: the model the verdict stands on must not sit at an edge
@@ -253,18 +280,33 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
     if not effects and misfit:
         warnings.append(f"the elastic fit misfits (p = {el['misfit_p']:.2g}) but no effect "
                         f"earns its parameters (best BIC "
-                        f"{min(o['delta_bic'] for o in sel['steps'][0]['options']):+.1f} > "
+                        f"{min(o['delta_bic'] for o in run.sel['steps'][0]['options']):+.1f} > "
                         f"{settings.delta_bic:g}): unexplained misfit")
     warnings += [f"pattern: {p}" for p in patterns]
-    steps = _steps_json(sel, fitter, fd, prep, settings, cause_of)
-    chain = [m.name for m in sel["chain"]]
+    return {"el": el, "ve": ve, "fin": fin, "effects": effects, "misfit": misfit,
+            "verdict": verdict, "at_bound": at_bound, "beyond": beyond,
+            "patterns": patterns, "warnings": warnings}
+
+
+def _assemble(data, prep, settings, run: _Run, j: dict) -> dict:
+    """The report of :func:`diagnose_time_data` (its docstring lists the keys)."""
+    from skinsuction import __version__
+    from skinsuction.identify import laplace_intervals
+    from skinsuction.provenance import collect
+
+    from ._time_effects import CREEP_SECOND_TERM
+
+    fd, sel, visco, final, fitter = prep["data"], run.sel, run.visco, run.final, run.fitter
+    effects = j["effects"]
+    named = effects[0] if effects else "none"
+    steps = _steps_json(sel, run)
     fitted_models = {m.name: m for m in sel["chain"]}
     fitted_models[visco.name] = visco
-    report = {
+    return {
         "kind": "time curves",
         "skinsuction_version": __version__,
         "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "verdict": verdict, "named": named, "cause": named, "effects": effects,
+        "verdict": j["verdict"], "named": named, "cause": named, "effects": effects,
         "creep_terms": final.terms,
         "causes": {VISCOELASTIC_CREEP: {"hypothesis": HYPOTHESIS,
                                         "parameters": ["g", "tau_s"]},
@@ -272,18 +314,19 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
                                        "and a slow creep), a refinement of creep",
                                        "parameters": ["g_2", "tau_2"]},
                    **{n: {"hypothesis": c.hypothesis, "parameters": [c.symbol]}
-                      for n, c in cause_of.items() if n is not None}},
-        "steps": steps, "removed": sel["removed"], "chain": chain, "final": fin,
-        "creep_layers": creep_layers,
+                      for n, c in run.cause_of.items() if n is not None}},
+        "steps": steps, "removed": sel["removed"],
+        "chain": [m.name for m in sel["chain"]], "final": j["fin"],
+        "creep_layers": run.creep_layers,
         "ambiguous_with": sorted({e for s in steps for e in s["ambiguous_with"]}),
-        "elastic": el, "viscoelastic": ve,
-        "gain": _gain(el, ve, fin if effects else ve),
-        "intervals": intervals,
-        "patterns": patterns,
+        "elastic": j["el"], "viscoelastic": j["ve"],
+        "gain": _gain(j["el"], j["ve"], j["fin"] if effects else j["ve"]),
+        "intervals": laplace_intervals(visco.rays, fd, visco.fit, level=settings.level),
+        "patterns": j["patterns"],
         "decision": {"alpha": settings.alpha, "delta_bic": settings.delta_bic,
-                     "ambiguity_bic": settings.ambiguity_bic, "elastic_misfits": bool(misfit),
-                     "causes_tried": fitter.causes},
-        "at_bound": at_bound, "beyond_space": beyond,
+                     "ambiguity_bic": settings.ambiguity_bic,
+                     "elastic_misfits": bool(j["misfit"]), "causes_tried": fitter.causes},
+        "at_bound": j["at_bound"], "beyond_space": j["beyond"],
         "geometry": {**prep["geometry"].to_dict(),
                      "notes": prep["space"].notes(sorted(prep["rays"])) + fitter.notes},
         "input": {"path": str(data.path),
@@ -294,121 +337,31 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
                                       "ambiguity_bic": settings.ambiguity_bic,
                                       "time_causes": fitter.causes,
                                       "repeats": settings.repeats, "seed": settings.seed}),
-        "warnings": warnings,
+        "warnings": j["warnings"],
         "fit": {d.label: {"time_s": d.time_s.tolist(),
                           "measured_mm": d.deflection_mm.tolist(),
                           "elastic_mm": np.asarray(m0, float).tolist(),
                           "viscoelastic_mm": np.asarray(m1, float).tolist(),
                           "models": {name: np.asarray(m.fit.fitted_mm[k], float).tolist()
                                      for name, m in fitted_models.items()}}
-                for k, (d, m0, m1) in enumerate(zip(fd, base.fit.fitted_mm,
+                for k, (d, m0, m1) in enumerate(zip(fd, run.base.fit.fitted_mm,
                                                     visco.fit.fitted_mm))},
     }
-    report["summary"] = time_summary_text(report)
-    return report
 
 
-def _steps_json(sel, fitter, fd, prep, settings, cause_of) -> list:
+def _steps_json(sel, run: _Run) -> list:
     """The steps of the selection, each added effect with its model's parameters and
     intervals."""
     out = []
-    chain = sel["chain"]
     for k, step in enumerate(sel["steps"]):
         rec = dict(step)
         if step["added"] is not None:
-            m = chain[k + 1]
-            js = _model_json(m, fd, prep, settings, cause_of[m.elastic_cause])
+            js = run.model_json(sel["chain"][k + 1])
             rec["model"] = {key: js[key] for key in ("model", "effects", "parameters",
                                                        "intervals", "chi2", "bic",
                                                        "reduced_chi2", "misfit_p", "skin")}
         out.append(rec)
     return out
-
-
-def _params_text(params: dict, intervals: dict | None = None) -> str:
-    """``X1d = 0.05 [0.048, 0.052] MPa, ...`` of a fit."""
-    out = []
-    keys = [k for k in params if not k.endswith("instantaneous") and k not in ("g", "tau_s")]
-    iv = intervals or {}
-    for k in keys:
-        v = params[k]
-        r = iv.get(k) if isinstance(iv.get(k), dict) else None
-        out.append(f"{k} = {v:.4g}" + (f" [{r['lower']:.3g}, {r['upper']:.3g}]" if r else ""))
-    for i, (g, tau) in enumerate(zip(params.get("g") or [], params.get("tau_s") or []), 1):
-        rg, rt = iv.get(f"g_{i}"), iv.get(f"tau_{i}")
-        out.append(f"g = {g:.3g}" + (f" [{rg['lower']:.3g}, {rg['upper']:.3g}]" if rg else "")
-                   + f", tau = {tau:.3g} s"
-                   + (f" [{rt['lower']:.3g}, {rt['upper']:.3g}]" if rt else ""))
-    return ", ".join(out)
-
-
-def time_summary_text(report: dict) -> str:
-    """A few lines for the terminal and report.md: the elastic fit, each step of the
-    model, the effects named."""
-    el, ve = report["elastic"], report["viscoelastic"]
-    p = ve["parameters"]
-    lines = []
-    assumed = (report.get("geometry") or {}).get("assumptions") or []
-    if assumed:
-        lines.append("ASSUMED: " + "; ".join(assumed))
-    lines.append(f"Elastic fit: X1d = {el['parameters']['X1d']:.4g} MPa, X1h = "
-                 f"{el['parameters']['X1h']:.4g} MPa, chi^2/dof = {el['reduced_chi2']:.3g} "
-                 f"(misfit p = {el['misfit_p']:.2g}).")
-    lines.append(f"Creep alone: X1d = {p['X1d']:.4g} MPa, X1h = {p['X1h']:.4g} MPa "
-                 f"(long-time), g = {p['g'][0]:.3g}, tau = {p['tau_s'][0]:.3g} s, chi^2/dof = "
-                 f"{ve['reduced_chi2']:.3g}; BIC {ve['bic'] - el['bic']:+.1f}.")
-    for step in report.get("steps", []):
-        if step["added"] is None:
-            best = min(step["options"], key=lambda o: o["bic"])
-            lines.append(f"Step {step['step']}: nothing added (best {best['model']}: BIC "
-                         f"{best['delta_bic']:+.1f} against {step['from']}"
-                         + (", which does not misfit" if step["from_misfit_p"] >= report[
-                             "decision"]["alpha"] else "") + ").")
-            continue
-        opt = next(o for o in step["options"] if o["effects"][-1] == step["added"])
-        m = step["model"]
-        tie = (f"; tied with {', '.join(step['ambiguous_with'])}" if step["ambiguous_with"]
-               else "")
-        lines.append(f"Step {step['step']}: + {step['added']} (chi^2 {opt['delta_chi2']:+.1f}, "
-                     f"BIC {opt['delta_bic']:+.1f}{tie}): "
-                     f"{_params_text(m['parameters'], m['intervals'])}.")
-    for r in report.get("removed", []):
-        why = r.get("reason", "it no longer earns its place in the final model")
-        lines.append(f"Removed {r['effect']}: {why} (BIC {r['delta_bic_without']:+.1f} "
-                     "without it).")
-    for label, names in (report.get("at_bound") or {}).items():
-        lines.append(f"AT BOUND: the {label} fit's {', '.join(names)} at an edge of the space "
-                     "or the spectrum (see the warnings): a bound, not an estimate.")
-    effects = report.get("effects", [])
-    if not effects:
-        lines.append("cause none: the elastic model explains the time curves (no effect "
-                     "beyond the noise)" if not report["decision"]["elastic_misfits"] else
-                     "cause none: the elastic model misfits, but no effect explains it")
-    else:
-        fin = report["final"]
-        lines.append(f"effects {', '.join(effects)}: final model chi^2/dof = "
-                     f"{fin['reduced_chi2']:.3g} (misfit p = {fin['misfit_p']:.2g})")
-        if effects == [VISCOELASTIC_CREEP]:
-            lines.append(f"cause {VISCOELASTIC_CREEP}: the skin creeps; the elastic model "
-                         "misses it and a relaxation spectrum fits")
-    cl = report.get("creep_layers") or {}
-    if cl.get("tested"):
-        p, iv = cl["parameters"], cl["intervals"]
-        lines.append(f"Which layer creeps: {cl['creeping']} (a spectrum per layer, BIC "
-                     f"{cl['delta_bic']:+.1f} against one for both"
-                     + (", decisive" if cl["decisive"] else "") + "): dermis g = "
-                     f"{p['g_dermis'][0]:.3g} [{iv['g_dermis']['lower']:.3g}, "
-                     f"{iv['g_dermis']['upper']:.3g}], hypodermis g = {p['g_hypodermis'][0]:.3g} "
-                     f"[{iv['g_hypodermis']['lower']:.3g}, {iv['g_hypodermis']['upper']:.3g}].")
-    elif report.get("effects") and VISCOELASTIC_CREEP in report["effects"]:
-        lines.append(f"Which layer creeps: not tested: {cl.get('reason')}.")
-    if report.get("beyond_space"):
-        lines.append("verdict beyond_space: the model sits at an edge of the simulated space "
-                     "(" + ", ".join(b["parameter"] for b in report["beyond_space"])
-                     + "): the effects named are those of the nearest simulated skin")
-    for pat in report.get("patterns", []):
-        lines.append(f"Not explained: {pat}.")
-    return "\n".join(lines)
 
 
 def diagnose_time_file(path, space_path=None, settings: Settings | None = None, *,
@@ -431,93 +384,3 @@ def diagnose_time_file(path, space_path=None, settings: Settings | None = None, 
     return report
 
 
-def write_time_report(report: dict, out_dir) -> dict:
-    """``report.json``, ``report.md`` and ``fit.png``/``fit.pdf`` in ``out_dir`` (atomic)."""
-    import json
-    from pathlib import Path
-
-    from skinsuction._files import atomic_output
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {"json": out / "report.json", "md": out / "report.md", "png": out / "fit.png",
-             "pdf": out / "fit.pdf"}
-    _write_text(paths["json"], json.dumps(report, indent=1, default=_json_default) + "\n")
-    g = report["gain"]
-    other = "final" if report.get("effects") else "viscoelastic"
-    other_name = report["final"]["model"] if report.get("effects") else "creep alone"
-    md = ["# Diagnosis of time curves", "", f"Input: `{report['input']['path']}`", "",
-          "```", report["summary"], "```", "", "## The model, effect by effect", "",
-          "| step | from | option | Δχ² | ΔBIC | decisive | added |", "|---|---|---|---|---|---|---|"]
-    for step in report.get("steps", []):
-        for o in step["options"]:
-            md.append(f"| {step['step']} | {step['from']} | {o['model']} | "
-                      f"{o['delta_chi2']:+.1f} | {o['delta_bic']:+.1f} | "
-                      f"{'yes' if o['decisive'] else 'no'} | "
-                      f"{'**yes**' if o['effects'][-1] == step['added'] else ''} |")
-    md += ["", f"| curve | phase | RMS elastic (µm) | RMS {other_name} (µm) |", "|---|---|---|---|"]
-    for curve, phases in g["rms_um"].items():
-        for ph, v in phases.items():
-            md.append(f"| {curve} | {ph} | {_fmt(v['elastic'])} | {_fmt(v[other])} |")
-    if report["warnings"]:
-        md += ["", "## Warnings", ""] + [f"- {w}" for w in report["warnings"]]
-    _write_text(paths["md"], "\n".join(md) + "\n")
-    _plot(report, paths["png"], paths["pdf"], atomic_output)
-    return paths
-
-
-def _write_text(path, text):
-    from skinsuction._files import atomic_output
-
-    with atomic_output(path) as tmp:
-        tmp.write_text(text, encoding="utf-8")
-
-
-def _fmt(v):
-    return "-" if v is None else f"{v:.3g}"
-
-
-def _json_default(o):
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    raise TypeError(type(o).__name__)
-
-
-def _plot(report, png, pdf, atomic_output):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fits = report["fit"]
-    fig, axes = plt.subplots(2, len(fits), figsize=(6 * len(fits), 6), squeeze=False,
-                             sharex="col", gridspec_kw={"height_ratios": [3, 1]})
-    for k, (label, f) in enumerate(fits.items()):
-        t = np.asarray(f["time_s"])
-        m = np.asarray(f["measured_mm"])
-        ax, rx = axes[0, k], axes[1, k]
-        ax.plot(t, m, ".", ms=2, color="0.4", label="measured")
-        models = f.get("models") or {"neo_hookean": f["elastic_mm"],
-                                     VISCOELASTIC_CREEP: f["viscoelastic_mm"]}
-        chain = report.get("chain") or list(models)
-        order = chain + [n for n in models if n not in chain]
-        for j, name in enumerate(order):
-            y = np.asarray(models[name], dtype=float)
-            final = bool(report.get("effects")) and name == chain[-1]
-            ax.plot(t, y, f"C{j}-", lw=1.6 if final else 0.9,
-                    label=name + (" (final)" if final else ""))
-            rx.plot(t, 1e3 * (m - y), f"C{j}-", lw=0.9 if final else 0.6)
-        ax.set_title(label)
-        ax.set_ylabel("deflection (mm)")
-        rx.set_ylabel("residual (µm)")
-        rx.set_xlabel("time (s)")
-        rx.axhline(0.0, color="0.7", lw=0.5)
-        ax.legend(fontsize=8)
-    fig.suptitle("effects: " + (", ".join(report.get("effects") or []) or "none"))
-    fig.tight_layout()
-    for path in (png, pdf):
-        with atomic_output(path) as tmp:
-            fig.savefig(tmp, dpi=120, format=path.suffix[1:])
-    plt.close(fig)

@@ -154,7 +154,7 @@ class EffectFitter:
         index = 2 + 3 * (self.causes.index(cause) + 1 if cause else 0) + _terms(key)
         return np.random.SeedSequence(self._seed, spawn_key=(index,))
 
-    def fit(self, effects, parent: TimeModel | None = None) -> TimeModel:
+    def fit(self, effects) -> TimeModel:
         """The model of ``effects`` (cached by set: the order only names it)."""
         from skinsuction.identify import fit_time_model
 

@@ -232,7 +232,6 @@ class ElasticRays:
         self._axis = LagrangeAxis(np.asarray(space.spec.pressures_mbar, dtype=float))
         self.load_max = float(space.spec.load_max)
         self.cause = space.cause
-        self.d = self._interp.d
 
     def __call__(self, theta, pressure_mbar) -> np.ndarray:
         """Deflections (N, T) in mm of candidates ``theta (N, d)`` (``d`` = 2, or 3 with
