@@ -10,6 +10,12 @@ config.scale_free_space -> FE ray bundles, one job per (model, probe, X1h/X1d)
   -> check against the default space shipped with the package, ray by ray
   (results/tables/shipped_space_check.csv; default target)
 
+config.scale_free_space.pairs -> the rays of two causes at once, both away from
+  neutral (their edges are the single causes' spaces)
+  -> results/simulated_space/scale_free/pairs/<pair>.parquet (target
+  scale_free_pairs; not in the default target: about 3 100 FE rays, some 45 CPU-min,
+  so the study reads the pairs shipped with the package unless they are built)
+
 Developer rule, not in any target: `snakemake --cores 2 ship_scale_free_space`
 copies the built model files into src/skinsuction/data/scale_free/ with
 PROVENANCE.json (what identify, diagnose and study read when no build is in the
@@ -26,8 +32,11 @@ from skinsuction.space import (  # noqa: E402
     BUNDLE_ID_PATTERN,
     SHIPPED_ATOL_MM,
     SHIPPED_RTOL,
+    PAIRS_FOLDER,
     RaySpec,
     bundle_id,
+    pair_bundles,
+    pairs_from_config,
     ray_bundles,
     registry_from_config,
 )
@@ -36,10 +45,12 @@ SF = config["scale_free_space"]
 try:
     SF_CAUSES = registry_from_config(SF["causes"])
     SF_SPEC = RaySpec.from_config(SF, config.get("mesh"), config.get("mesh_fallback"))
+    SF_PAIRS = pairs_from_config(SF.get("pairs"), SF_CAUSES)
 except (KeyError, ValueError) as err:
     raise _config_error("scale_free_space", err)
 SF_MODELS = {BASELINE: None, **SF_CAUSES}
-SF_BUNDLES = ray_bundles(SF_SPEC, SF_CAUSES, SF.get("rays_per_job", 1))
+SF_PAIR_BUNDLES = pair_bundles(SF_SPEC, SF_PAIRS, SF.get("rays_per_job", 1))
+SF_BUNDLES = {**ray_bundles(SF_SPEC, SF_CAUSES, SF.get("rays_per_job", 1)), **SF_PAIR_BUNDLES}
 SF_DIR = "results/simulated_space/scale_free"
 SF_SPACES = expand(f"{SF_DIR}/{{model}}.parquet", model=SF_MODELS)
 
@@ -58,6 +69,7 @@ SF_MODEL_BUNDLES = {
 wildcard_constraints:
     bundle=BUNDLE_ID_PATTERN,
     model="|".join(map(re.escape, SF_MODELS)),
+    pair="|".join(map(re.escape, SF_PAIRS)) or "no_pair",
 
 
 SCALE_FREE_OUTPUTS = [
@@ -71,8 +83,12 @@ SCALE_FREE_OUTPUTS = [
 SHIPPED_CHECK_OUTPUTS = ["results/tables/shipped_space_check.csv"]
 
 
+SF_PAIR_SPACES = expand(f"{SF_DIR}/{PAIRS_FOLDER}/{{pair}}.parquet", pair=SF_PAIRS)
+
+
 localrules:
     scale_free_space,
+    scale_free_pairs,
     ship_scale_free_space,
 
 
@@ -80,6 +96,36 @@ rule scale_free_space:
     """Target: every model of the scale-free space and its coverage frontier."""
     input:
         SCALE_FREE_OUTPUTS,
+
+
+rule scale_free_pairs:
+    """Target: the spaces of the pairs of causes (scale_free_space.pairs)."""
+    input:
+        SF_PAIR_SPACES,
+
+
+rule assemble_pair_space:
+    input:
+        bundles=lambda w: [f"{SF_DIR}/rays/{b}.parquet" for b in SF_PAIR_BUNDLES
+                           if b.startswith(f"{w.pair}__")],
+        # the pair's edges: each cause's own space
+        singles=lambda w: [f"{SF_DIR}/{c}.parquet" for c in SF_PAIRS[w.pair].cause_names],
+    output:
+        space=f"{SF_DIR}/{PAIRS_FOLDER}/{{pair}}.parquet",
+    log:
+        "logs/scale_free/pairs/{pair}.log",
+    params:
+        spec=SF_SPEC.to_dict(),
+        pair=lambda w: SF_PAIRS[w.pair].to_dict(),
+        code=code_hash("diagnose", *SPACE_CODE),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/assemble_pair_space.py"
 
 
 rule simulate_ray_bundle:

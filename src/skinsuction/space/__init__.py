@@ -84,6 +84,21 @@ from ._coordinates import SpaceCoordinates, load, reference_pressure, similar_le
 from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
 from ._open import LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
+from ._pairs import (
+    PAIRS_FOLDER,
+    CausePair,
+    PairRayInterpolant,
+    PairRaySpace,
+    assemble_pair_space,
+    interpolant,
+    pair_bundles,
+    pair_from_config,
+    pair_rays,
+    pairs_from_config,
+    read_pair_space,
+    read_pair_spaces,
+    space_causes,
+)
 from ._ray_solve import build_ray_spaces, compute_bundle, compute_ray
 from ._ray_space import (
     RaySpace,
@@ -169,6 +184,9 @@ __all__ = [
     # the scale-free layout
     "BASELINE", "DEFAULT_CAUSES", "NONE", "SCALES", "Cause", "default_registry",
     "registry_from_config", "BUNDLE_ID_PATTERN", "EXTRA_KEYWORDS", "RAY_ID_PATTERN",
+    "PAIRS_FOLDER", "CausePair", "PairRayInterpolant", "PairRaySpace", "assemble_pair_space",
+    "interpolant", "pair_bundles", "pair_from_config", "pair_rays", "pairs_from_config",
+    "read_pair_space", "read_pair_spaces", "space_causes",
     "RaySpace", "RaySpec", "SpaceFileError", "SpaceMissingError", "assemble_ray_space",
     "build_ray_spaces", "bundle_id", "compute_bundle", "compute_ray", "coverage_frontier",
     "parse_ray_id", "ray_bundles", "ray_id", "rays_of", "read_ray_space", "read_ray_spaces",
