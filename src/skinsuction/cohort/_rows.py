@@ -188,7 +188,7 @@ def _analyse_ramp(row, entry, ctx, seed, t0):
         try:
             diag = diagnose(data, ctx["ray_spaces"], _seeded(ctx["settings"], seed),
                             source={"file": entry.source, "sha256": row["sha256"]},
-                            on_demand=ctx["space"].on_demand)
+                            on_demand=ctx["space"].on_demand, pairs=ctx.get("pair_spaces"))
             row.update(_diagnosis_columns(diag))
         except ValueError as err:
             warnings.append(f"diagnosis failed: {' '.join(str(err).split())}")
@@ -291,7 +291,7 @@ def _write_time_report(diag, out_dir):
 # ------------------------------------------------------------------ every measurement
 def study_rows(entries, *, space, ray_spaces=None, settings=None, repeats: int = 2,
                seed: int = 0, level: float = 0.95, workers: int = 1, reports_dir=None,
-               progress=None) -> list:
+               progress=None, pair_spaces=None) -> list:
     """One row per measurement of a study: identified (and diagnosed).
 
     Parameters
@@ -314,6 +314,8 @@ def study_rows(entries, *, space, ray_spaces=None, settings=None, repeats: int =
         ``reports_dir/<row>/``.
     progress : optional
         As for :class:`skinsuction.Progress`; False: none.
+    pair_spaces : dict, optional
+        ``{name: PairRaySpace}``: the ramps' second effect (:func:`skinsuction.diagnose.diagnose`).
 
     Returns
     -------
@@ -321,7 +323,8 @@ def study_rows(entries, *, space, ray_spaces=None, settings=None, repeats: int =
         The ids (renamed ``id_<name>`` where they clash with :data:`RESULT_COLUMNS`)
         then the result columns, in the order of ``entries``.
     """
-    ctx = {"space": space, "ray_spaces": ray_spaces, "settings": settings,
+    ctx = {"space": space, "ray_spaces": ray_spaces, "pair_spaces": pair_spaces,
+           "settings": settings,
            "repeats": int(repeats), "seed": int(seed), "level": float(level),
            "reports_dir": reports_dir}
     jobs = [(i, e, sha) for i, (e, sha) in enumerate(entries)]

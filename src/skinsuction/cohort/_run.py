@@ -98,7 +98,13 @@ def run_study(path, out_dir, *, space_dir=None,
     space, entries = _measurements(path, space_dir, space)
     ray_spaces, settings = (_diagnosis(space_dir, ray_spaces, diagnosis_settings, level)
                             if diagnose else (None, None))
+    pairs = None
+    if ray_spaces is not None:
+        from skinsuction.space import BASELINE, pairs_for
+
+        pairs = pairs_for(space_dir, ray_spaces[BASELINE].spec)
     rows = study_rows(entries, space=space, ray_spaces=ray_spaces, settings=settings,
+                      pair_spaces=pairs,
                       repeats=repeats, seed=seed, level=level, workers=workers,
                       reports_dir=(out / "reports") if reports else None, progress=progress)
     df, id_cols = study_frame(rows)

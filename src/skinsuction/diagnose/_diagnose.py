@@ -22,6 +22,7 @@ from ._settings import Settings
 from ._stats import describe_residuals
 from ._steps import (BeyondSpaceError, cause_spaces, fit_baseline, fit_candidate, fit_json,
                      fitted_skin, intervals_json, residual_dict, start)
+from ._pairs import pair_final, second_effect
 from ._summary import summary_text
 from ._window import fit_in_window, ratio_window, widened_window
 
@@ -33,7 +34,7 @@ __all__ = ["BeyondSpaceError", "BEYOND_SPACE", "Settings", "diagnose", "diagnose
 
 
 def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=None,
-             geometry=None, on_demand=None) -> dict:
+             geometry=None, on_demand=None, pairs: dict | None = None) -> dict:
     """Diagnose loaded measured data (:class:`skinsuction.measured.MeasuredData`).
 
     Parameters
@@ -51,6 +52,10 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     on_demand : skinsuction.space.OnDemandRays, optional
         Solves the neo-Hookean rays of a probe or layers the spaces lack; without
         it such data raise an InputError.
+    pairs : dict name -> PairRaySpace, optional
+        Spaces of two causes at once (:func:`skinsuction.space.read_pair_spaces`):
+        where one cause earns its parameter, a second is tried with them
+        (:func:`skinsuction.diagnose._pairs.second_effect`).
 
     Returns
     -------
@@ -72,8 +77,15 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         if c["intervals"] is None and c["cause"] == standing:
             c["intervals"] = intervals_json(run.spaces[c["cause"]], run.fd,
                                             fits[c["cause"]].theta, run.noise, settings)
+    step = second_effect(run, candidates, fits, pairs or {})
     report = _report(run, base, candidates, source)
     report.update(_verdict(base, candidates, best, cause, verdict, ambiguous, beyond))
+    if step["added"] is not None:
+        report.update(pair_final(base, step))
+        report["ambiguous_with"] = step["ambiguous_with"]
+        step["added"].pop("_fit")
+    report["second_effect"] = step
+    report["steps"] = _steps_json(base, candidates, report, step)
     report.update({"summary": None, "settings": {**asdict(settings), "n_points": run.n_points},
                    "spaces": _spaces_json(run.spaces), "seconds": None})
     report["summary"] = summary_text(report)
@@ -158,6 +170,24 @@ def _verdict(base, candidates, best, cause, verdict, ambiguous, beyond) -> dict:
     }
 
 
+def _steps_json(base, candidates: list, report: dict, step: dict) -> list:
+    """The model built effect by effect: each step's options and the effect it added."""
+    first = {"step": 1, "from": BASELINE,
+             "added": report["effects"][0] if report["effects"] else None,
+             "options": [{"effects": [c["cause"]], "delta_chi2": c["delta_chi2"],
+                          "delta_bic": c["delta_bic"], "removes_misfit": c["removes_misfit"]}
+                         for c in candidates]}
+    if not step["tried"]:
+        return [first]
+    second = {"step": 2, "from": step["parent"],
+              "added": step["added"]["added"] if step["added"] else None,
+              "options": [{"effects": o["effects"], "delta_chi2": o["delta_chi2"],
+                           "delta_bic": o["delta_bic"],
+                           "delta_bic_vs_added_alone": o["delta_bic_vs_added_alone"],
+                           "removes_misfit": o["removes_misfit"]} for o in step["options"]]}
+    return [first, second]
+
+
 def _spaces_json(spaces: dict) -> dict:
     """What the report records of each space: its reach, mesh and commit."""
     return {name: {"x1d_range_mpa": list(s.spec.x1d_range),
@@ -172,7 +202,7 @@ def _spaces_json(spaces: dict) -> dict:
 # --------------------------------------------------------------------- a file
 def diagnose_file(measured_path, space_dir=None, settings: Settings | None = None,
                   spaces: dict | None = None, *, thickness: dict | None = None,
-                  on_demand=None, workers: int = 1) -> dict:
+                  on_demand=None, workers: int = 1, pairs: dict | None = None) -> dict:
     """Read a measured CSV (as ``skinsuction identify`` does) and diagnose it.
 
     Parameters
@@ -198,6 +228,9 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
         layers the spaces lack, or None to solve them.
     workers : int
         Processes that solve rays on demand.
+    pairs : dict, optional
+        The pair spaces; by default those that go with the space
+        (:func:`skinsuction.space.pairs_for`).
 
     Returns
     -------
@@ -207,7 +240,7 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
     from skinsuction._files import file_sha256
     from skinsuction.measured import MeasuredData, check_against_space, geometry_of, load_measured
 
-    from skinsuction.space import OnDemandRays, read_ray_spaces, resolve_space
+    from skinsuction.space import OnDemandRays, pairs_for, read_ray_spaces, resolve_space
 
     if spaces is None or space_dir is not None:
         src = resolve_space(space_dir)
@@ -233,6 +266,9 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
     solver = None
     if on_demand is not False:
         solver = on_demand if on_demand not in (None, True) else OnDemandRays(sp, workers=workers)
-    report = diagnose(data, spaces, settings, source=source, geometry=geometry, on_demand=solver)
+    if pairs is None:
+        pairs = pairs_for(space_dir, sp)
+    report = diagnose(data, spaces, settings, source=source, geometry=geometry, on_demand=solver,
+                      pairs=pairs)
     report["input"]["warnings"] = warnings + report["input"]["warnings"]
     return report

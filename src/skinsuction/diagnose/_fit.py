@@ -23,7 +23,7 @@ import numpy as np
 from skinsuction.identify import Chi2Objective, bound_flags, profile_intervals, repeated_fit
 from skinsuction.identify.measured_fit import decorrelate, space_error_direction
 
-from skinsuction.space import RayInterpolant, RaySpace
+from skinsuction.space import RayInterpolant, RaySpace, interpolant, space_causes
 
 __all__ = ["FitData", "Fit", "ModelCurves", "fit_model", "fit_bounds", "fit_intervals",
            "with_space_error", "PAPER_WF", "DIAGNOSIS_POLISH"]
@@ -107,7 +107,8 @@ class ModelCurves:
     def __init__(self, space: RaySpace, data: dict):
         self.space = space
         self.data = data
-        self.interp = {p: RayInterpolant(space, p, d.pressure_mbar) for p, d in data.items()}
+        self.interp = {p: interpolant(space, p, d.pressure_mbar) for p, d in data.items()}
+        self.causes = space_causes(space)
         first = next(iter(self.interp.values()))
         self.nuisance = tuple(getattr(space, "nuisance", ()) or ())
         self.n_model = first.d
@@ -145,26 +146,30 @@ class ModelCurves:
         """Physical parameters (MPa, mm, 1) of one theta."""
         x1d = 10.0 ** theta[0]
         out = {"X1d": float(x1d), "X1h": float(x1d * 10.0 ** theta[1])}
-        cause = self.space.cause
-        if cause is not None:
-            out[cause.symbol] = float(cause.value(cause.from_axis(theta[2]), x1d))
+        for k, cause in enumerate(self.causes):
+            out[cause.symbol] = float(cause.value(cause.from_axis(theta[2 + k]), x1d))
         for j, n in enumerate(self.nuisance):
             out[n.symbol] = float(n.thickness(theta[self.n_model + j]))
         return out
 
 
-def nested_start(base_theta, cause) -> np.ndarray:
-    """A cause's theta at its neutral value from the neo-Hookean fit's theta.
+def nested_start(base_theta, cause, at: int = 2) -> np.ndarray:
+    """A cause's theta at its neutral value from the theta of the model it extends.
 
-    The cause's coordinate goes after (X1d, X1h/X1d) and before any thickness
-    nuisance, as :class:`ModelCurves` orders them; the cause's model then fits
-    at least as well as the neo-Hookean one.
+    The cause's coordinate goes at ``at``: after (X1d, X1h/X1d) and before any
+    thickness nuisance, as :class:`ModelCurves` orders them, for a cause added to
+    the neo-Hookean model; after the first cause's (``at=3``) for the second of a
+    pair added to the first, or before it (``at=2``) for the first added to the
+    second.  The extended model then fits at least as well as the one it extends.
 
     Parameters
     ----------
     base_theta : array_like
-        The neo-Hookean fit's theta (log10 X1d, log10 X1h/X1d, thickness offsets).
+        The extended model's theta (log10 X1d, log10 X1h/X1d[, cause axis],
+        thickness offsets).
     cause : Cause
+    at : int
+        Where the cause's coordinate goes.
 
     Returns
     -------
@@ -177,7 +182,7 @@ def nested_start(base_theta, cause) -> np.ndarray:
     array([-1.4, -2. ,  1. ,  0.3])
     """
     t = np.asarray(base_theta, dtype=float)
-    return np.concatenate([t[:2], [cause.to_axis(cause.neutral)], t[2:]])
+    return np.concatenate([t[:at], [cause.to_axis(cause.neutral)], t[at:]])
 
 
 #: Search range of a thickness nuisance, in sd units either side of the given value.
@@ -337,17 +342,19 @@ def fit_bounds(space: RaySpace, data: dict, theta) -> dict:
     """
     model = ModelCurves(space, data)
     obj = _Objective(model)
-    spec, cause = space.spec, space.cause
+    spec, causes = space.spec, space_causes(space)
     raised = model.lower[0] > math.log10(spec.x1d_range[0]) + 1e-12
     x1d_lo = ("scale_free_space.load.max (the largest measured pressure over load.max sets "
               "the lowest X1d)" if raised else "scale_free_space.x1d_mpa.min")
     names, kinds = ["X1d", "X1h"], ["log", "log"]
     keys = [(x1d_lo, "scale_free_space.x1d_mpa.max"),
             ("scale_free_space.ratio", "scale_free_space.ratio")]
-    if cause is not None:
+    for cause in causes:
         names.append(cause.symbol)
         kinds.append("axis")
-        keys.append((f"scale_free_space.causes.{cause.name}.nodes",) * 2)
+        key = (f"scale_free_space.causes.{cause.name}.nodes" if len(causes) == 1
+               else f"scale_free_space.pairs (the nodes of {cause.name})")
+        keys.append((key,) * 2)
     for n in model.nuisance:
         names.append(n.symbol)
         kinds.append("axis")
@@ -357,8 +364,8 @@ def fit_bounds(space: RaySpace, data: dict, theta) -> dict:
     for f in flags:
         f["value"] = params[f["parameter"]]
         f["neutral"] = False
-    if cause is not None:
-        f = flags[2]
+    for k, cause in enumerate(causes):
+        f = flags[2 + k]
         end = cause.nodes[0] if f["side"] == "lower" else cause.nodes[-1]
         f["neutral"] = bool(f["edge"] == "window" and end == cause.neutral)
     return {f["parameter"]: f for f in flags}
@@ -392,17 +399,18 @@ def fit_intervals(space: RaySpace, data: dict, theta, *, noise_dof: float = math
     LikelihoodIntervals
     """
     model = ModelCurves(space, data)
-    cause = space.cause
     params = {"X1d": lambda t: 10.0 ** t[:, 0], "X1h": lambda t: 10.0 ** (t[:, 0] + t[:, 1])}
-    if cause is not None:
-        params[cause.symbol] = lambda t: np.asarray(
-            cause.value(cause.from_axis(t[:, 2]), 10.0 ** t[:, 0]), dtype=float)
+    for k, cause in enumerate(model.causes):
+        params[cause.symbol] = (lambda t, k=k, cause=cause: np.asarray(
+            cause.value(cause.from_axis(t[:, 2 + k]), 10.0 ** t[:, 0]), dtype=float))
     for j, n in enumerate(model.nuisance):
         params[n.symbol] = (lambda t, j=j, n=n:
                             np.asarray(n.thickness(t[:, model.n_model + j]), dtype=float))
     ci = profile_intervals(_Objective(model).residuals, theta, model.lower, model.upper,
                            params, level=level, noise_dof=noise_dof)
-    if cause is not None and cause.neutral == cause.lower:
+    for cause in model.causes:
+        if cause.neutral != cause.lower:
+            continue
         iv = ci.parameters[cause.symbol]
         if iv.lower_open and iv.lower <= cause.value(cause.neutral, 1.0) + 1e-12:
             ci.parameters[cause.symbol] = replace(iv, lower_open=False)

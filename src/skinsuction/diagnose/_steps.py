@@ -351,8 +351,9 @@ def fitted_skin(run: Run, fit, cause=None) -> dict:
         Its layers (given or assumed) and the spaces' bottom.
     fit : Fit
         The fit: X1d, X1h, a cause's parameter, thickness offsets.
-    cause : Cause, optional
-        The cause fitted; its parameter goes on its paths (:attr:`Cause.paths`).
+    cause : Cause or tuple of Cause, optional
+        The cause fitted (or a pair's two); its parameter goes on its paths
+        (:attr:`Cause.paths`).
 
     Returns
     -------
@@ -362,8 +363,9 @@ def fitted_skin(run: Run, fit, cause=None) -> dict:
     bottom = next(iter(run.spaces.values())).spec.bottom
     skin = Skin.two_layer(p["X1d"], p["X1h"], t_d=p.get("t_d", run.geometry.t_d),
                           t_h=p.get("t_h", run.geometry.t_h), bottom=bottom)
-    if cause is not None:
-        skin = skin.replace({path: p[cause.symbol] for path in cause.paths})
+    causes = () if cause is None else (cause if isinstance(cause, tuple) else (cause,))
+    for c in causes:
+        skin = skin.replace({path: p[c.symbol] for path in c.paths})
     return skin.to_dict()
 
 
