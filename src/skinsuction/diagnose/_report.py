@@ -61,7 +61,9 @@ def report_markdown(report: dict, figures=None) -> str:
     lines = [
         f"# Diagnosis of {Path(report['input'].get('file') or 'the measured curves').name}",
         "",
-        f"**Cause: `{report['cause']}`** ({report['verdict'].replace('_', ' ')})",
+        f"**Cause: `{report['cause']}`** ({report['verdict'].replace('_', ' ')})"
+        + (f"; effects, in the order added: {', '.join(f'`{e}`' for e in report['effects'])}"
+           if len(report.get("effects") or ()) > 1 else ""),
         "",
         report["summary"],
         "",
@@ -105,9 +107,13 @@ def report_markdown(report: dict, figures=None) -> str:
            "show a pattern first."),
         "",
     ]
+    lines += _second_effect_lines(report)
     rows = _interval_rows("neo_hookean", b.get("intervals"))
     for c in sorted(report["candidates"], key=lambda c: c["bic"]):
         rows += _interval_rows(c["cause"], c.get("intervals"))
+    added = (report.get("second_effect") or {}).get("added")
+    if added:
+        rows += _interval_rows(" + ".join(added["effects"]), added.get("intervals"))
     if rows:
         level = (b.get("intervals") or {}).get("level", 0.95)
         lines += [f"## {100 * level:g} % intervals (profile likelihood)", "",
@@ -122,6 +128,29 @@ def report_markdown(report: dict, figures=None) -> str:
         lines.append("")
     lines.append(f"Run time {report['seconds']:.1f} s; skinsuction {report.get('skinsuction_version')}.")
     return "\n".join(lines) + "\n"
+
+
+def _second_effect_lines(report: dict) -> list:
+    """The second step: each pair tried beside the first cause, and what it gained."""
+    step = report.get("second_effect")
+    if not step:
+        return []
+    head = ["## Second effect", ""]
+    if not step["tried"]:
+        return head + [f"Not tried: {step['why']}.", ""]
+    rows = [[" + ".join(o["effects"]), _params(o["parameters"]), _num(o["E_um"]),
+             f"{o['delta_bic']:.1f}", f"{o['delta_bic_vs_added_alone']:.1f}",
+             f"{'yes' if o['systematic_misfit'] else 'no'} ({o['misfit_p_value']:.2g})",
+             "**added**" if step["added"] is o or (step["added"] or {}).get("model") == o["model"]
+             else ""] for o in sorted(step["options"], key=lambda o: o["bic"])]
+    return head + [
+        f"From `{step['parent']}` (the lowest-BIC cause that earns its parameter), each pair "
+        f"that holds it was fitted. A pair is added if its ΔBIC ≤ "
+        f"{report['settings']['delta_bic']:g} against each of its causes alone and its "
+        "residuals pass the pattern test.", "",
+        markdown_table(rows, ("effects", "parameters (MPa, mm, 1)", "E (µm)",
+                              f"ΔBIC vs {step['parent']}", "ΔBIC vs the added alone",
+                              "misfit left (p)", ""), align=False), ""]
 
 
 #: The columns of the candidates' table of ``report.md``.

@@ -69,6 +69,9 @@ def _summary_text(report: dict) -> str:
             s += ("The residuals are consistent with the noise; no candidate earns its extra "
                   "parameter: cause none.")
         return s
+    step = report.get("second_effect") or {}
+    if step.get("added"):
+        return s + _pair_text(report, step)
     c = next(c for c in report["candidates"] if c["cause"] == report["cause"])
     g = report["gain"]
     if g is None:  # the lowest BIC, at an edge, without earning its parameter
@@ -94,6 +97,26 @@ def _summary_text(report: dict) -> str:
     elif report.get("runner_up"):
         r = report["runner_up"]
         s += f" Next best: {r['cause']} (BIC {r['bic_above_chosen']:.1f} higher)."
+    tried = [o for o in step.get("options") or () if not (o["decisive"] and o["removes_misfit"])]
+    if tried:
+        o = min(tried, key=lambda o: o["bic"])
+        s += (f" A second effect was tried: {o['added']} beside {step['parent']} "
+              f"(delta BIC {o['delta_bic']:.1f}) does not earn its place.")
+    return s
+
+
+def _pair_text(report: dict, step: dict) -> str:
+    """Two effects: the first cause, the second added to it, their fit and gains."""
+    o, g = step["added"], report["gain"]
+    first, second = o["effects"]
+    s = (f"Two effects: {first}, then {second} added to it. Fit with both: "
+         f"{_params_text(o['parameters'])}, E = {o['E_um']:.3g} µm (delta BIC "
+         f"{g['delta_bic']:.1f} against neo-Hookean, {o['delta_bic']:.1f} against {first} "
+         f"alone, {o['delta_bic_vs_added_alone']:.1f} against {second} alone); its residuals "
+         "are consistent with the noise.")
+    if report.get("ambiguous_with"):
+        s += (f" {', '.join(report['ambiguous_with'])} explains the curves almost as well "
+              f"(BIC within {report['settings']['ambiguity_bic']:g}).")
     return s
 
 

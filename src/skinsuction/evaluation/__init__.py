@@ -60,6 +60,15 @@ from ._effects import (
     effects_confusion_summary,
     effects_skin,
 )
+from ._ramp_effects import (
+    RAMP_CLASSES,
+    RAMP_DESIGNS,
+    diagnose_ramp_draw,
+    draw_ramp_effects,
+    ramp_effects_markdown,
+    ramp_effects_study,
+    ramp_effects_summary,
+)
 from ._published import (
     FACE_PROTOCOL,
     PUBLISHED_FACE,
@@ -98,6 +107,9 @@ __all__ = [
     # single and paired effects in time curves
     "EFFECT_CLASSES", "EFFECT_DESIGNS", "draw_effects", "effects_skin", "diagnose_effect_draw",
     "effects_confusion_study", "effects_confusion_summary", "effects_confusion_markdown",
+    # single and paired effects in ramps
+    "RAMP_CLASSES", "RAMP_DESIGNS", "draw_ramp_effects", "diagnose_ramp_draw",
+    "ramp_effects_study", "ramp_effects_summary", "ramp_effects_markdown",
     # the diagnosis over the physiological domain
     "WIDE_DOMAIN", "draw_wide", "domain_from_config", "given_keywords", "initial_stress_kpa",
     "run_draw", "run_draws",

@@ -20,7 +20,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from skinsuction.space import BASELINE
-from skinsuction.space import RayInterpolant, RaySpace
+from skinsuction.space import RaySpace, interpolant, space_causes
 
 __all__ = ["AccuracyPoint", "draw_points", "compare_point", "normalised_error",
            "REL_TARGET", "ABS_TARGET_UM", "PROTOCOLS"]
@@ -46,6 +46,7 @@ class AccuracyPoint:
     p_step: float
     t_d: float = 1.0  # layer thicknesses, mm
     t_h: float = 1.0
+    coordinate2: float = math.nan  # a pair's second cause's coordinate
 
     @property
     def pressures_mbar(self) -> np.ndarray:
@@ -99,8 +100,8 @@ def _model_keywords(space: RaySpace, point: AccuracyPoint) -> dict:
           "bottom": space.spec.bottom}
     if (point.t_d, point.t_h) != (1.0, 1.0):
         kw.update(t_d=point.t_d, t_h=point.t_h)
-    if space.cause is not None:
-        kw.update(space.cause.simulate_keywords(point.coordinate, point.x1d))
+    for cause, c in zip(space_causes(space), (point.coordinate, point.coordinate2)):
+        kw.update(cause.simulate_keywords(c, point.x1d))
     return kw
 
 
@@ -120,10 +121,10 @@ def compare_point(space: RaySpace, point: AccuracyPoint) -> dict:
     fe = np.asarray(curve.deflection_mm, dtype=float).copy()
     if not curve.converged:
         fe[~(p <= curve.last_converged_mbar)] = np.nan
-    f = RayInterpolant(space, point.probe_mm, p)
+    f = interpolant(space, point.probe_mm, p)
     theta = [math.log10(point.x1d), math.log10(point.ratio)]
-    if space.cause is not None:
-        theta.append(space.cause.to_axis(point.coordinate))
+    for cause, c in zip(space_causes(space), (point.coordinate, point.coordinate2)):
+        theta.append(cause.to_axis(c))
     interp = f([theta])[0]
     pos = p > 0
     both = pos & np.isfinite(fe) & np.isfinite(interp)

@@ -76,8 +76,8 @@ class VirtualExperiment:
 def virtual_experiment(x1d, x1h, cause: Cause | None = None, value=None, *, noise_um=2.0,
                        seed=0, probes_mm=(2.0, 6.0), pressures_mbar=None, mesh=None,
                        replicates: int = 1, bottom="fixed", fallback=None,
-                       clean: dict | None = None, layers: dict | None = None
-                       ) -> VirtualExperiment:
+                       clean: dict | None = None, layers: dict | None = None,
+                       keywords: dict | None = None) -> VirtualExperiment:
     """FE curves at (X1d, X1h) with the hidden effect ``cause = value``, plus noise.
 
     ``value`` is in the unit of the cause's parameter (X2d in MPa, t_d in mm,
@@ -87,12 +87,14 @@ def virtual_experiment(x1d, x1h, cause: Cause | None = None, value=None, *, nois
     these parameters from an earlier run (e.g. a benchmark's cache), used instead
     of solving again; the noise is drawn from ``seed`` all the same.  ``layers``:
     ``{"t_d": mm, "t_h": mm}`` of the skin (default the paper's 1 mm each).
+    ``keywords``: further keywords of the model (a second effect, e.g.
+    ``{"prestretch": 1.1}``), hidden like ``cause``'s but not in ``truth``.
     """
     from skinsuction.space import solve_with_fallbacks
 
     p = (np.arange(0.0, 101.0, 2.0) if pressures_mbar is None
          else np.asarray(pressures_mbar, dtype=float))
-    kw = {k: float(v) for k, v in (layers or {}).items()}
+    kw = {k: float(v) for k, v in {**(layers or {}), **(keywords or {})}.items()}
     if cause is not None:
         kw[cause.keyword] = float(value)
     rng = np.random.default_rng(seed)

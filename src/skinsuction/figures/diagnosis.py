@@ -10,8 +10,10 @@ import numpy as np
 
 from skinsuction.figures import _style
 from skinsuction.figures.fit import PROBE_COLOR, TEXT_BOX, interval_lines
-#: Line style of the models.
+
+#: Line style of the models: the first effect alone where a second was added.
 MODEL_STYLE = {"baseline": {"linestyle": "--", "color": "0.35"},
+               "first": {"linestyle": ":", "color": "#c05a00"},
                "extended": {"linestyle": "-", "color": "#2e933c"}}
 
 
@@ -29,9 +31,20 @@ def _pressures(report):
 
 
 def _chosen(report):
-    """The candidate the verdict names; None for `none`, and for `beyond_space` when the
-    baseline itself sits at an edge (no candidate stands behind the verdict)."""
+    """The model the verdict names (two effects: the pair's fit); None for `none`, and for
+    `beyond_space` when the baseline itself sits at an edge (no candidate stands behind
+    the verdict)."""
+    added = (report.get("second_effect") or {}).get("added")
+    if added:
+        return {**added, "cause": " + ".join(added["effects"])}
     return next((c for c in report["candidates"] if c["cause"] == report["cause"]), None)
+
+
+def _first(report):
+    """The first effect's own fit, where a second effect was added to it (else None)."""
+    if not (report.get("second_effect") or {}).get("added"):
+        return None
+    return next(c for c in report["candidates"] if c["cause"] == report["cause"])
 
 
 #: Units of the fitted parameters.
@@ -64,6 +77,11 @@ def plot_fit(report: dict, title: str | None = None):
             ax.plot(p, _arr(report["baseline"]["fitted_mm"][probe]),
                     label=f"neo-Hookean, E = {report['baseline']['E_um']:.2g} µm",
                     **MODEL_STYLE["baseline"])
+            first = _first(report)
+            if first is not None:
+                ax.plot(p, _arr(first["fit"]["fitted_mm"][probe]),
+                        label=f"{first['cause']} alone, E = {first['E_um']:.2g} µm",
+                        **MODEL_STYLE["first"])
             if chosen is not None:
                 ax.plot(p, _arr(chosen["fit"]["fitted_mm"][probe]),
                         label=f"{chosen['cause']}, E = {chosen['E_um']:.2g} µm",

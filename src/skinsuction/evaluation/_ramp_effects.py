@@ -1,0 +1,263 @@
+"""Single and paired effects in pressure ramps: named effect by effect?
+
+:func:`ramp_effects_study` draws skins of each class of :data:`RAMP_CLASSES`
+(seeded; X1d log-uniform 0.03-0.12 MPa, X1h/X1d 0.01-0.3, the paper's 1 mm layers
+unless the hypodermis is the effect):
+
+* ``none``: neo-Hookean;
+* ``strain_stiffening``: X2d/X1d log-uniform 2-30;
+* ``pre_tension``: lambda0 1.03-1.15;
+* ``hypodermis_thickness``: t_h log-uniform 2-6 mm;
+* ``strain_stiffening+pre_tension`` and ``strain_stiffening+hypodermis_thickness``.
+
+Each is measured by the designs of :data:`RAMP_DESIGNS` (a ramp on two probes to a
+suction drawn log-uniform in 100-500 mbar, 51 points, 2 µm noise): FE curves
+(:func:`skinsuction.evaluation.virtual_experiment`, independent of the spaces the
+diagnosis reads), then :func:`skinsuction.diagnose.diagnose_file` with the single
+causes' spaces and the pair spaces shipped with the package.
+
+An effect of the truth is *detectable* when, on the noise-free curves judged with
+the noisy file's sd, the model of the true effects beats the model without it by
+the decision's ``|delta_bic|`` (the single causes' and the pairs' fits of that
+diagnosis).  :func:`ramp_effects_summary` gives, per design: each effect's rate
+named where detectable (right or tied), both effects of a pair named, false effects
+on the neo-Hookean draws, wrong effects not tied, the median errors of the draws
+named right, CPU per diagnosis.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from multiprocessing import get_context
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+__all__ = ["RAMP_CLASSES", "RAMP_DESIGNS", "draw_ramp_effects", "diagnose_ramp_draw",
+           "ramp_effects_study", "ramp_effects_summary", "ramp_effects_markdown"]
+
+STIFF, PRE, THICK = "strain_stiffening", "pre_tension", "hypodermis_thickness"
+#: The true classes drawn.
+RAMP_CLASSES = ("none", STIFF, PRE, THICK, f"{STIFF}+{PRE}", f"{STIFF}+{THICK}")
+#: The designs: name -> probes (mm), each a ramp.
+RAMP_DESIGNS = {"ramp, 2 + 6 mm": (2.0, 6.0), "ramp, 4 + 8 mm": (4.0, 8.0)}
+#: The model keyword and truth column of each effect.
+KEYWORDS = {STIFF: ("x2d", "x2d_mpa"), PRE: ("prestretch", "lambda0"), THICK: ("t_h", "t_h_mm")}
+
+
+def draw_ramp_effects(rng, truth: str) -> tuple:
+    """``(effects, values)`` of one draw of class ``truth`` (:data:`RAMP_CLASSES`).
+
+    >>> effects, s = draw_ramp_effects(np.random.default_rng(0), "strain_stiffening+pre_tension")
+    >>> effects, 100 <= s["p_max_mbar"] <= 500, s["t_h_mm"]
+    (['strain_stiffening', 'pre_tension'], True, 1.0)
+    """
+    effects = [] if truth == "none" else truth.split("+")
+    x1d = 10 ** rng.uniform(np.log10(0.03), np.log10(0.12))
+    s = {"x1d": x1d, "ratio": 10 ** rng.uniform(-2, np.log10(0.3)),
+         "x2d_mpa": x1d * 10 ** rng.uniform(np.log10(2), np.log10(30)) if STIFF in effects
+         else 0.0,
+         "lambda0": rng.uniform(1.03, 1.15) if PRE in effects else 1.0,
+         "t_h_mm": 10 ** rng.uniform(np.log10(2), np.log10(6)) if THICK in effects else 1.0,
+         "p_max_mbar": float(np.round(10 ** rng.uniform(2, np.log10(500)), -1))}
+    return effects, s
+
+
+def _keywords(s: dict) -> dict:
+    return {kw: s[col] for kw, col in KEYWORDS.values()}
+
+
+def _detectable(clean: dict, effects: list, delta_bic: float) -> dict:
+    """Each true effect: does the model of the true effects beat the one without it?"""
+    single = {c["cause"]: c["bic"] for c in clean["candidates"]}
+    pairs = {frozenset(o["effects"]): o["bic"] for o in clean["second_effect"]["options"]}
+    base = clean["baseline"]["bic"]
+    out = {}
+    for e in effects:
+        if len(effects) == 1:
+            full, without = single.get(e), base
+        else:
+            other = next(x for x in effects if x != e)
+            full, without = pairs.get(frozenset(effects)), single.get(other)
+        out[e] = bool(full is not None and without is not None and full - without <= delta_bic)
+    return out
+
+
+def diagnose_ramp_draw(job) -> dict:
+    """One draw, one design: FE curves, the diagnosis, the detectability; never raises
+    (an FE or fit failure is the row's ``error``).
+
+    ``job`` = ``(design, probes, truth, effects, values, seed, folder)``.
+    """
+    from skinsuction.diagnose import Settings, diagnose_file
+    from skinsuction.space import SHIPPED_SPACE_DIR, pairs_for, read_ray_spaces
+
+    from ._virtual import virtual_experiment, write_csv
+
+    design, probes, truth, effects, s, seed, folder = job
+    row = {"design": design, "truth": truth, "seed": seed, **s, "error": None}
+    try:
+        spaces = read_ray_spaces(SHIPPED_SPACE_DIR)
+        pairs = pairs_for(None, spaces["neo_hookean"].spec)
+        p = np.linspace(0.0, s["p_max_mbar"], 51)
+        t0 = time.process_time()
+        ve = virtual_experiment(s["x1d"], s["x1d"] * s["ratio"], noise_um=2.0, seed=seed,
+                                probes_mm=probes, pressures_mbar=p, keywords=_keywords(s))
+        row["fe_cpu_s"] = time.process_time() - t0
+        noisy = write_csv(ve, Path(folder) / f"n{seed}.csv")
+        t0 = time.process_time()
+        r = diagnose_file(noisy, None, Settings(seed=seed), spaces=spaces, pairs=pairs,
+                          on_demand=False)
+        row["diagnosis_cpu_s"] = time.process_time() - t0
+        sd_um = float(r["noise_um"])
+        ve.curves = {(q, 0): c for q, c in ve.clean.items()}
+        clean = diagnose_file(write_csv(ve, Path(folder) / f"c{seed}.csv"), None,
+                              Settings(seed=seed, noise_um=sd_um), spaces=spaces, pairs=pairs,
+                              on_demand=False)
+        for e, ok in _detectable(clean, effects, Settings().delta_bic).items():
+            row[f"detectable_{e}"] = ok
+        final = (r.get("extended") or {}).get("parameters") or r["baseline"]["parameters"]
+        row.update({"named": ",".join(r["effects"]), "verdict": r["verdict"],
+                    "ambiguous_with": ",".join(r.get("ambiguous_with") or []),
+                    "second_tried": bool(r["second_effect"]["tried"]), "noise_um": sd_um,
+                    "fit_x1d": final["X1d"], "fit_x2d": final.get("X2d"),
+                    "fit_lambda0": final.get("lambda0"), "fit_t_h": final.get("t_h")})
+    except Exception as err:  # noqa: BLE001 - a failed draw is recorded, not dropped
+        row["error"] = f"{type(err).__name__}: {' '.join(str(err).split())[:300]}"
+    return row
+
+
+def ramp_effects_study(per_class: int = 10, seed: int = 0, designs=None,
+                       classes=RAMP_CLASSES, processes: int = 1,
+                       progress=None) -> pd.DataFrame:
+    """Every draw of every class under every design (:func:`diagnose_ramp_draw`).
+
+    Parameters
+    ----------
+    per_class : int
+        Draws per class (each measured by every design).
+    seed : int
+    designs : list of str, optional
+        Keys of :data:`RAMP_DESIGNS` (default: all).
+    classes : sequence of str
+    processes : int
+        Worker processes (fork).
+    progress : callable, optional
+        Called with each row as it comes.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (draw, design), failed ones with their ``error``.
+    """
+    designs = list(designs or RAMP_DESIGNS)
+    unknown = [d for d in designs if d not in RAMP_DESIGNS]
+    if unknown:
+        raise ValueError(f"designs: unknown {unknown}; known: {list(RAMP_DESIGNS)}")
+    rng = np.random.default_rng(seed)
+    folder = tempfile.mkdtemp(prefix="ramp_effects_")
+    jobs = []
+    for _ in range(int(per_class)):
+        for truth in classes:
+            effects, s = draw_ramp_effects(rng, truth)
+            for design in designs:
+                jobs.append((design, RAMP_DESIGNS[design], truth, effects, s,
+                             seed * 10000 + len(jobs), folder))
+    rows = []
+    if processes > 1:
+        with get_context("fork").Pool(processes) as pool:
+            for row in pool.imap_unordered(diagnose_ramp_draw, jobs):
+                rows.append(row)
+                if progress:
+                    progress(row)
+    else:
+        for job in jobs:
+            rows.append(diagnose_ramp_draw(job))
+            if progress:
+                progress(rows[-1])
+    return pd.DataFrame(rows).sort_values(["seed"]).reset_index(drop=True)
+
+
+def _sets(r):
+    named = set(filter(None, str(r["named"]).split(",")))
+    truth = set() if r["truth"] == "none" else set(r["truth"].split("+"))
+    tied = set(filter(None, str(r.get("ambiguous_with") or "").split(",")))
+    return named, truth, tied
+
+
+def _rel_error(fit, true):
+    return abs(fit / true - 1.0) if fit is not None and true else np.nan
+
+
+def ramp_effects_summary(frame: pd.DataFrame) -> dict:
+    """Per design: the rates and errors of the module docstring.
+
+    Returns
+    -------
+    dict
+        ``{design: {...}}``: ``per_effect`` (``{effect: [named right, detectable]}``),
+        ``pairs`` ``[both named, both detectable]``, ``false`` ``[draws naming an
+        effect, neo-Hookean draws]``, ``wrong_untied`` ``[draws, all]``, median
+        relative errors of the draws named right (X1d, X2d, lambda0 - 1, t_h), the
+        median CPU per diagnosis and the failed draws.
+    """
+    out = {}
+    ok = frame[frame["error"].isna()]
+    for design, g in ok.groupby("design"):
+        per, pairs, false, wrong, errs = {}, [0, 0], [0, 0], [0, len(g)], {
+            "X1d": [], "X2d": [], "lambda0-1": [], "t_h": []}
+        for _, r in g.iterrows():
+            named, truth, tied = _sets(r)
+            det = {e for e in truth if bool(r.get(f"detectable_{e}"))}
+            for e in det:
+                cell = per.setdefault(e, [0, 0])
+                cell[1] += 1
+                cell[0] += int(e in named or (bool(tied) and e in tied | named))
+            if len(truth) == 2 and det == truth:
+                pairs[1] += 1
+                pairs[0] += int(truth <= named)
+            if not truth:
+                false[1] += 1
+                false[0] += int(bool(named))
+            wrong[0] += int(bool(named - truth) and not (named - truth) <= tied
+                            and not (tied & truth))
+            if named and named == truth:
+                errs["X1d"].append(_rel_error(r["fit_x1d"], r["x1d"]))
+                if STIFF in truth:
+                    errs["X2d"].append(_rel_error(r["fit_x2d"], r["x2d_mpa"]))
+                if PRE in truth:
+                    errs["lambda0-1"].append(_rel_error((r["fit_lambda0"] or 1) - 1,
+                                                        r["lambda0"] - 1))
+                if THICK in truth:
+                    errs["t_h"].append(_rel_error(r["fit_t_h"], r["t_h_mm"]))
+        out[design] = {"per_effect": per, "pairs": pairs, "false": false, "wrong_untied": wrong,
+                       "median_error": {k: float(np.nanmedian(v)) if v else None
+                                        for k, v in errs.items()},
+                       "diagnosis_cpu_s": float(g["diagnosis_cpu_s"].median()),
+                       "n": int(len(g))}
+    out["failed"] = int(frame["error"].notna().sum())
+    return out
+
+
+def ramp_effects_markdown(frame: pd.DataFrame) -> str:
+    """The summary as a Markdown table, one row per design."""
+    s = ramp_effects_summary(frame)
+    head = ("| design | draws | " + " | ".join(f"{e} named / detectable" for e in KEYWORDS)
+            + " | pairs: both named | false effect | wrong, not tied | median error X1d, "
+            "X2d, λ0−1, t_h | CPU per diagnosis |")
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    for design, d in s.items():
+        if design == "failed":
+            continue
+        cells = [f"{d['per_effect'].get(e, [0, 0])[0]}/{d['per_effect'].get(e, [0, 0])[1]}"
+                 for e in KEYWORDS]
+        err = ", ".join("–" if v is None else f"{100 * v:.1f} %"
+                        for v in d["median_error"].values())
+        lines.append(f"| {design} | {d['n']} | " + " | ".join(cells)
+                     + f" | {d['pairs'][0]}/{d['pairs'][1]} | {d['false'][0]}/{d['false'][1]}"
+                     f" | {d['wrong_untied'][0]}/{d['wrong_untied'][1]} | {err} | "
+                     f"{d['diagnosis_cpu_s']:.0f} s |")
+    lines.append(f"\nFailed draws: {s['failed']}.")
+    return "\n".join(lines) + "\n"
