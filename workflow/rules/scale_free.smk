@@ -90,6 +90,7 @@ localrules:
     scale_free_space,
     scale_free_pairs,
     ship_scale_free_space,
+    ship_pair_spaces,
 
 
 rule scale_free_space:
@@ -228,3 +229,25 @@ rule ship_scale_free_space:
         "../envs/skinsuction.yaml"
     script:
         "../scripts/ship_scale_free_space.py"
+
+
+rule ship_pair_spaces:
+    """Developer rule (no target asks for it): ship the built pair spaces with the package.
+
+    Copies results/simulated_space/scale_free/pairs/<pair>.parquet into
+    src/skinsuction/data/scale_free/pairs/ with its own PROVENANCE.json; the single
+    spaces shipped there must have the same ray specification.
+    """
+    input:
+        pairs=SF_PAIR_SPACES,
+    log:
+        "logs/scale_free/ship_pair_spaces.log",
+    params:
+        dest=str(SF_SHIPPED),
+        repo=str(Path(workflow.basedir)),
+        build_command="snakemake --cores 2 scale_free_pairs",
+    threads: 1
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/ship_pair_spaces.py"

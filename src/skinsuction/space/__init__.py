@@ -128,6 +128,7 @@ from ._shipped import (
     SpaceSource,
     default_space_dir,
     resolve_space,
+    ship_pair_spaces,
     ship_space,
     shipped_provenance,
     verify_shipped_files,
@@ -169,7 +170,7 @@ __all__ = [
     "WORKFLOW_SPACE_DIR", "SHIPPED_SPACE_DIR", "PROVENANCE_FILE", "SpaceSource",
     "default_space_dir", "resolve_space", "shipped_provenance", "verify_shipped_files",
     "shipped_check_applies", "compare_ray_spaces", "knife_edge_rays", "check_shipped_space",
-    "ShippedSpaceMismatch", "ship_space", "SHIPPED_RTOL", "SHIPPED_ATOL_MM",
+    "ShippedSpaceMismatch", "ship_space", "ship_pair_spaces", "SHIPPED_RTOL", "SHIPPED_ATOL_MM",
     # storage
     "AXES", "AXIS_PATHS", "BOTTOMS", "COLUMNS", "DEFAULTS", "METADATA_KEY", "POINT_ID_PATTERN",
     "SIGNIFICANT_DIGITS", "SPEC_KEYS", "CorruptCurveError", "curve_frame", "parse_point_id",

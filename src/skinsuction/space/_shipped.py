@@ -51,7 +51,7 @@ log = logging.getLogger(__name__)
 __all__ = [
     "WORKFLOW_SPACE_DIR", "SHIPPED_SPACE_DIR", "PROVENANCE_FILE", "SpaceSource",
     "default_space_dir", "resolve_space", "shipped_provenance", "verify_shipped_files",
-    "ship_space",
+    "ship_space", "ship_pair_spaces",
 ]
 
 #: Where the workflow writes the scale-free space, relative to the working directory.
@@ -277,7 +277,26 @@ def verify_shipped_files(folder=SHIPPED_SPACE_DIR) -> list:
     for path in sorted(folder.glob("*.parquet")):
         if path.name not in listed:
             problems.append(f"{path.name}: not listed in {PROVENANCE_FILE}")
-    return problems
+    return problems + _verify_pairs(folder)
+
+
+def _verify_pairs(folder: Path) -> list:
+    """The pair spaces' files against their own ``pairs/PROVENANCE.json``."""
+    pairs = folder / "pairs"
+    files = sorted(pairs.glob("*.parquet"))
+    prov = shipped_provenance(pairs) if pairs.is_dir() else None
+    if prov is None:
+        return [f"pairs/{p.name}: no pairs/{PROVENANCE_FILE}" for p in files]
+    listed = prov.get("files") or {}
+    out = [f"pairs/{p.name}: not listed in pairs/{PROVENANCE_FILE}" for p in files
+           if p.name not in listed]
+    for name, rec in sorted(listed.items()):
+        path = pairs / name
+        if not path.is_file():
+            out.append(f"pairs/{name}: listed in pairs/{PROVENANCE_FILE} but missing")
+        elif file_sha256(path) != rec.get("sha256"):
+            out.append(f"pairs/{name}: its SHA-256 differs from pairs/{PROVENANCE_FILE}'s")
+    return out
 
 
 def _normal(obj):
@@ -395,4 +414,81 @@ def ship_space(built_dir, dest=SHIPPED_SPACE_DIR, *, config_file: str | None = N
         tmp.write_text(json.dumps(record, indent=1, sort_keys=False) + "\n", encoding="utf-8")
     log.info("shipped %d files from %s to %s (commit %s)", len(names), built_dir, dest,
              record["git_commit"])
+    return record
+
+
+def ship_pair_spaces(built_dir, dest=SHIPPED_SPACE_DIR, *, build_command: str | None = None,
+                     repo=None) -> dict:
+    """Copy the built pair spaces (``<built_dir>/pairs/*.parquet``) into ``dest/pairs``.
+
+    Their ``PROVENANCE.json`` records each file (SHA-256, rows, rays), the pairs,
+    the ray specification and the commits they were built and shipped from.  The
+    pairs must share the specification of the single spaces shipped in ``dest``.
+
+    Parameters
+    ----------
+    built_dir : path-like
+        The scale-free space's folder (its ``pairs/`` subfolder is shipped).
+    dest : path-like
+        The shipped space's folder (default: the package's).
+    build_command : str, optional
+        The command that built them, for the record.
+    repo : path-like, optional
+        The git repository whose commit is recorded.
+
+    Returns
+    -------
+    dict
+        The provenance record written.
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        No pair built, or one of another ray specification than the shipped space.
+    """
+    from skinsuction import __version__
+    from skinsuction.provenance import git_info, jsonable
+
+    from ._pairs import PAIRS_FOLDER, read_pair_space
+
+    src, out = Path(built_dir) / PAIRS_FOLDER, Path(dest) / PAIRS_FOLDER
+    files = sorted(src.glob("*.parquet"))
+    if not files:
+        raise FileNotFoundError(f"{src}: no pair spaces to ship (build them first: "
+                                "`snakemake --cores 2 scale_free_pairs`)")
+    base = read_ray_space(Path(dest) / f"{BASELINE}.parquet")
+    pairs = {p.name: read_pair_space(p) for p in files}
+    for name, s in pairs.items():
+        if _normal(s.spec.to_dict()) != _normal(base.spec.to_dict()):
+            raise ValueError(f"{src / name}: its ray specification differs from the shipped "
+                             f"{BASELINE}.parquet's (ship the single spaces first)")
+    out.mkdir(parents=True, exist_ok=True)
+    for path in files:
+        with atomic_output(out / path.name) as tmp:
+            _write_compact(path, tmp)
+    for stale in out.glob("*.parquet"):
+        if stale.name not in pairs:
+            stale.unlink()
+    git = git_info(repo)
+    record = jsonable({
+        "what": "the pair spaces of skinsuction's default scale-free space: two causes at "
+                "once, every node of the first times the listed nodes of the second; read by "
+                "diagnose and study for the second effect of a ramp",
+        "skinsuction_version": __version__,
+        "shipped_from_commit": git.get("commit"), "shipped_from_dirty": git.get("dirty"),
+        "shipped_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "build_command": build_command,
+        "ray_spec": base.spec.to_dict(),
+        "files": {name: {"sha256": file_sha256(out / name),
+                         "bytes": (out / name).stat().st_size,
+                         "pair": s.pair.to_dict(),
+                         "built_at_commit": (s.metadata.get("git") or {}).get("commit"),
+                         "created_utc": s.metadata.get("created_utc"),
+                         "new_rays": int(s.metadata.get("n_rays", 0)),
+                         "stopped_early": int(s.metadata.get("n_stopped", 0))}
+                  for name, s in pairs.items()},
+    })
+    with atomic_output(out / PROVENANCE_FILE) as tmp:
+        tmp.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
+    log.info("shipped %d pair spaces from %s to %s", len(files), src, out)
     return record
