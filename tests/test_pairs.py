@@ -18,6 +18,7 @@ from skinsuction.space import (
     BASELINE,
     CausePair,
     PairRayInterpolant,
+    PairRaySpace,
     RayInterpolant,
     RaySpace,
     RaySpec,
@@ -181,3 +182,101 @@ def test_pair_round_trips_through_its_dict():
     pair = _pair()
     assert CausePair.from_dict(pair.to_dict()) == pair
     assert BASELINE not in pair.name
+
+
+# ------------------------------------------------------------ the ramp's second effect
+def _toy(x1d, r, c1, c2, p, probe):
+    """A smooth family with the scaling law and two effects that do not compose in log M."""
+    q = p / (1e4 * x1d)
+    soft = 0.4 * (1 + 0.2 / (r + 0.02)) if probe == 6 else 0.1 * (1 + 0.01 / (r + 0.02))
+    m = soft * q / (1 + 0.3 * soft * q)
+    m = m / (1 + 0.05 * c1 * m ** 2 * (1 + 4 * (c2 - 1)))  # pre-stretch stiffens the X2 term
+    return m / (1 + 0.5 * (c2 - 1) / (0.02 + m))
+
+
+def _toy_spaces():
+    spec = RaySpec([2, 6], np.geomspace(0.005, 0.5, 9), load_max=5000, load_steps=20,
+                   x1d_range=(0.02, 0.2), x1d_ref=0.02)
+    p = np.asarray(spec.pressures_mbar)
+    stiff, pre = REG["strain_stiffening"], REG["pre_tension"]
+
+    def rays(n1, n2):
+        return {probe: np.array([[_toy(spec.x1d_ref, r, c1, c2, p, probe) for c1 in n1
+                                  for c2 in n2] for r in spec.ratio_nodes])
+                for probe in spec.probes_mm}
+
+    spaces = {BASELINE: RaySpace(None, spec, np.array([np.nan]), rays([0.0], [1.0])),
+              stiff.name: RaySpace(stiff, spec, np.array(stiff.nodes), rays(stiff.nodes, [1.0])),
+              pre.name: RaySpace(pre, spec, np.array(pre.nodes), rays([0.0], pre.nodes))}
+    pair = CausePair(stiff, pre)
+    coords = np.array([(a, b) for a in stiff.nodes for b in pre.nodes])
+    pairs = {pair.name: PairRaySpace(stiff, spec, coords, rays(stiff.nodes, pre.nodes), {},
+                                     second=pre)}
+    return spaces, pairs
+
+
+def _toy_data(x1d, r, c1, c2, noise_um, seed):
+    from skinsuction.measured import MeasuredCurve, MeasuredData
+
+    rng = np.random.default_rng(seed)
+    p = np.arange(0.0, 101.0, 2.0)
+    curves = []
+    for probe in (2.0, 6.0):
+        m = _toy(x1d, r, c1, c2, p, probe) + rng.normal(0, 1e-3 * noise_um, p.size)
+        m[0] = 0.0
+        curves.append(MeasuredCurve(probe, p, m, "", 1))
+    return MeasuredData("toy.csv", tuple(curves), {}, ())
+
+
+FAST = dict(repeats=1, window_focusing={"n_samples": 400, "n_best": 10, "tolerance": 1e-6,
+                                        "max_iter": 100})
+
+
+@pytest.mark.parametrize("c1, c2, effects", [
+    (16.0, 1.08, ["strain_stiffening", "pre_tension"]),
+    (16.0, 1.0, ["strain_stiffening"]),
+    (0.0, 1.0, []),
+])
+def test_the_second_effect_is_added_only_where_it_earns_its_place(c1, c2, effects, tmp_path):
+    from skinsuction.diagnose import Settings, diagnose, write_report
+
+    spaces, pairs = _toy_spaces()
+    data = _toy_data(0.03, 0.02, c1, c2, 1.0, 4)
+    report = diagnose(data, spaces, Settings(**FAST), pairs=pairs,
+                      source={"file": "toy.csv", "sha256": "0"})
+    assert sorted(report["effects"]) == sorted(effects), report["summary"]
+    step = report["second_effect"]
+    assert step["tried"] == bool(effects), step["why"]
+    if len(effects) == 2:
+        assert report["verdict"] == "cause_found" and report["cause"] == report["effects"][0]
+        added = step["added"]
+        # both effects earn their place: against each cause alone
+        assert added["delta_bic"] <= -10 and added["delta_bic_vs_added_alone"] <= -10
+        ci = added["intervals"]
+        for name, truth in (("X1d", 0.03), ("X2d", 16.0 * 0.03), ("lambda0", 1.08)):
+            assert ci[name]["lower"] <= truth <= ci[name]["upper"], (name, ci[name])
+        assert report["extended"]["parameters"]["X2d"] == pytest.approx(0.48, rel=0.1)
+        assert [s["added"] for s in report["steps"]] == report["effects"]
+        assert "Two effects" in report["summary"]
+        paths = write_report(report, tmp_path)
+        md = paths["md"].read_text()
+        assert "## Second effect" in md and "**added**" in md
+    elif effects:
+        # the pair was fitted but did not beat the stiffening alone
+        assert step["added"] is None and step["options"]
+        assert step["options"][0]["delta_bic"] > -10
+        assert "does not earn its place" in report["summary"]
+
+
+def test_no_second_effect_at_the_subjects_layers():
+    from skinsuction.diagnose import Settings
+    from skinsuction.diagnose._pairs import second_effect
+
+    class Run:  # the only attributes the step reads before it fits
+        geometry = type("G", (), {"is_default": False})()
+        settings = Settings()
+
+    step = second_effect(Run(), [{"cause": "strain_stiffening", "decisive": True, "bic": 0}],
+                         {}, {"p": object()})
+    assert not step["tried"] and "subject's layers" in step["why"]
+    assert not second_effect(Run(), [], {}, {})["tried"]

@@ -433,6 +433,47 @@ if "diagnosis" in config:
             script:
                 "../scripts/time_effects_confusion.py"
 
+    if "ramp_effects_confusion" in DG:
+        # Opt-in (not in the default target): FE ramps and a diagnosis with the pair
+        # spaces per draw and design (two diagnoses: the noisy curves and, for the
+        # detectability, the noise-free ones).
+
+        rule ramp_effects_confusion:
+            """Single and paired effects in pressure ramps: FE draws of each class under
+            each design (2 + 6 and 4 + 8 mm, to 100-500 mbar), diagnosed with the pair
+            spaces."""
+            output:
+                draws="results/tables/ramp_effects_confusion.csv",
+                summary=report(
+                    "results/tables/ramp_effects_confusion.md",
+                    caption="../report/ramp_effects_confusion.rst",
+                    category="Diagnosis",
+                    labels={"table": "effects in ramps"},
+                ),
+                png=report(
+                    "results/figures/ramp_effects_confusion.png",
+                    caption="../report/ramp_effects_confusion.rst",
+                    category="Diagnosis",
+                    labels={"figure": "effects in ramps"},
+                ),
+                pdf="results/figures/ramp_effects_confusion.pdf",
+            log:
+                "logs/diagnosis/ramp_effects_confusion.log",
+            benchmark:
+                "results/benchmarks/diagnosis/ramp_effects_confusion.tsv"
+            params:
+                settings=DG["ramp_effects_confusion"],
+                code=code_hash("evaluation", "diagnose", "identify", "model", "measured",
+                               "figures", *SPACE_CODE),
+            threads: 2
+            resources:
+                mem_mb=3000,
+                runtime=60,
+            conda:
+                "../envs/skinsuction.yaml"
+            script:
+                "../scripts/ramp_effects_confusion.py"
+
     if "confusion_given_layers" in DG:
         # Opt-in (not in the default target): every draw has its own dermis, and every
         # candidate cause's rays are solved on demand at it and at +-1 sd of it (cut to

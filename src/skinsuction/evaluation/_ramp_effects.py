@@ -119,8 +119,10 @@ def diagnose_ramp_draw(job) -> dict:
         for e, ok in _detectable(clean, effects, Settings().delta_bic).items():
             row[f"detectable_{e}"] = ok
         final = (r.get("extended") or {}).get("parameters") or r["baseline"]["parameters"]
+        # a tied pair stands for its two causes
+        tied = sorted({c for m in r.get("ambiguous_with") or [] for c in m.split("_and_")})
         row.update({"named": ",".join(r["effects"]), "verdict": r["verdict"],
-                    "ambiguous_with": ",".join(r.get("ambiguous_with") or []),
+                    "ambiguous_with": ",".join(tied),
                     "second_tried": bool(r["second_effect"]["tried"]), "noise_um": sd_um,
                     "fit_x1d": final["X1d"], "fit_x2d": final.get("X2d"),
                     "fit_lambda0": final.get("lambda0"), "fit_t_h": final.get("t_h")})
@@ -187,77 +189,79 @@ def _sets(r):
     return named, truth, tied
 
 
-def _rel_error(fit, true):
-    return abs(fit / true - 1.0) if fit is not None and true else np.nan
-
-
 def ramp_effects_summary(frame: pd.DataFrame) -> dict:
-    """Per design: the rates and errors of the module docstring.
+    """The rates per design (see the module docstring), JSON-able; the structure of
+    :func:`skinsuction.evaluation.effects_confusion_summary`.
 
     Returns
     -------
     dict
-        ``{design: {...}}``: ``per_effect`` (``{effect: [named right, detectable]}``),
-        ``pairs`` ``[both named, both detectable]``, ``false`` ``[draws naming an
-        effect, neo-Hookean draws]``, ``wrong_untied`` ``[draws, all]``, median
-        relative errors of the draws named right (X1d, X2d, lambda0 - 1, t_h), the
-        median CPU per diagnosis and the failed draws.
+        ``{design: {"draws", "effects": {effect: {"with_effect", "detectable",
+        "named", "right_or_tied"}}, "pairs": [both named, both detectable],
+        "false_effect": [count, neo-Hookean draws], "wrong_not_tied": [count, draws
+        with effects], "median_error_pct": {parameter: [median, draws]},
+        "diagnosis_cpu_s": [median, 90th]}}`` and ``"failed"``.
     """
-    out = {}
-    ok = frame[frame["error"].isna()]
-    for design, g in ok.groupby("design"):
-        per, pairs, false, wrong, errs = {}, [0, 0], [0, 0], [0, len(g)], {
-            "X1d": [], "X2d": [], "lambda0-1": [], "t_h": []}
-        for _, r in g.iterrows():
-            named, truth, tied = _sets(r)
-            det = {e for e in truth if bool(r.get(f"detectable_{e}"))}
-            for e in det:
-                cell = per.setdefault(e, [0, 0])
-                cell[1] += 1
-                cell[0] += int(e in named or (bool(tied) and e in tied | named))
-            if len(truth) == 2 and det == truth:
-                pairs[1] += 1
-                pairs[0] += int(truth <= named)
-            if not truth:
-                false[1] += 1
-                false[0] += int(bool(named))
-            wrong[0] += int(bool(named - truth) and not (named - truth) <= tied
-                            and not (tied & truth))
-            if named and named == truth:
-                errs["X1d"].append(_rel_error(r["fit_x1d"], r["x1d"]))
-                if STIFF in truth:
-                    errs["X2d"].append(_rel_error(r["fit_x2d"], r["x2d_mpa"]))
-                if PRE in truth:
-                    errs["lambda0-1"].append(_rel_error((r["fit_lambda0"] or 1) - 1,
-                                                        r["lambda0"] - 1))
-                if THICK in truth:
-                    errs["t_h"].append(_rel_error(r["fit_t_h"], r["t_h_mm"]))
-        out[design] = {"per_effect": per, "pairs": pairs, "false": false, "wrong_untied": wrong,
-                       "median_error": {k: float(np.nanmedian(v)) if v else None
-                                        for k, v in errs.items()},
-                       "diagnosis_cpu_s": float(g["diagnosis_cpu_s"].median()),
-                       "n": int(len(g))}
-    out["failed"] = int(frame["error"].notna().sum())
+    ok = frame[frame["error"].isna()].copy()
+    for col in ("named", "ambiguous_with"):
+        ok[col] = ok[col].fillna("").astype(str)
+    out = {"failed": int(len(frame) - len(ok))}
+    for design, g in ok.groupby("design", sort=False):
+        sets = [_sets(r) for _, r in g.iterrows()]
+        rec = {"draws": int(len(g)), "effects": {}}
+        for e in KEYWORDS:
+            col = f"detectable_{e}"
+            rows = [(r, n, tied) for (_, r), (n, t, tied) in zip(g.iterrows(), sets) if e in t]
+            det = [(n, tied) for r, n, tied in rows if col in r and r[col] is True
+                   or r.get(col) == 1]
+            rec["effects"][e] = {"with_effect": len(rows), "detectable": len(det),
+                                 "named": sum(e in n for n, _ in det),
+                                 "right_or_tied": sum(e in n or e in tied for n, tied in det)}
+        both = [(n, t) for (_, r), (n, t, _) in zip(g.iterrows(), sets)
+                if len(t) == 2 and all(r.get(f"detectable_{e}") in (True, 1) for e in t)]
+        rec["pairs"] = [sum(t <= n for n, t in both), len(both)]
+        rec["false_effect"] = [sum(bool(n) for n, t, _ in sets if not t),
+                               sum(not t for _, t, _ in sets)]
+        rec["wrong_not_tied"] = [sum(bool(n - t) and not ((t - n) & tied)
+                                     for n, t, tied in sets if t), sum(bool(t) for _, t, _ in sets)]
+        right = g[[bool(t) and n == t for n, t, _ in sets]]
+        errs = {"X1d": (right["fit_x1d"] / right["x1d"] - 1).abs()}
+        for e, key, fit, true in ((STIFF, "X2d", "fit_x2d", "x2d_mpa"),
+                                  (PRE, "lambda0-1", "fit_lambda0", "lambda0"),
+                                  (THICK, "t_h", "fit_t_h", "t_h_mm")):
+            sub = right[right["truth"].str.contains(e)]
+            f, t = sub[fit].astype(float), sub[true].astype(float)
+            errs[key] = ((f - 1) / (t - 1) - 1).abs() if e == PRE else (f / t - 1).abs()
+        rec["median_error_pct"] = {k: [float(100 * v.median()), int(len(v))]
+                                   for k, v in errs.items() if len(v)}
+        cpu = g["diagnosis_cpu_s"].astype(float)
+        rec["diagnosis_cpu_s"] = [float(cpu.median()), float(cpu.quantile(0.9))]
+        out[design] = rec
     return out
 
 
 def ramp_effects_markdown(frame: pd.DataFrame) -> str:
-    """The summary as a Markdown table, one row per design."""
+    """The summary as Markdown: one table per design."""
     s = ramp_effects_summary(frame)
-    head = ("| design | draws | " + " | ".join(f"{e} named / detectable" for e in KEYWORDS)
-            + " | pairs: both named | false effect | wrong, not tied | median error X1d, "
-            "X2d, λ0−1, t_h | CPU per diagnosis |")
-    lines = [head, "|" + "---|" * (head.count("|") - 1)]
-    for design, d in s.items():
+    lines = ["# Single and paired effects in ramps", ""]
+    for design, rec in s.items():
         if design == "failed":
             continue
-        cells = [f"{d['per_effect'].get(e, [0, 0])[0]}/{d['per_effect'].get(e, [0, 0])[1]}"
-                 for e in KEYWORDS]
-        err = ", ".join("–" if v is None else f"{100 * v:.1f} %"
-                        for v in d["median_error"].values())
-        lines.append(f"| {design} | {d['n']} | " + " | ".join(cells)
-                     + f" | {d['pairs'][0]}/{d['pairs'][1]} | {d['false'][0]}/{d['false'][1]}"
-                     f" | {d['wrong_untied'][0]}/{d['wrong_untied'][1]} | {err} | "
-                     f"{d['diagnosis_cpu_s']:.0f} s |")
-    lines.append(f"\nFailed draws: {s['failed']}.")
+        lines += [f"## {design} ({rec['draws']} draws)", "",
+                  "| effect | draws with it | detectable | named | named or tied |",
+                  "|---|---|---|---|---|"]
+        for e, v in rec["effects"].items():
+            lines.append(f"| {e} | {v['with_effect']} | {v['detectable']} | {v['named']} | "
+                         f"{v['right_or_tied']} |")
+        err = ", ".join(f"{k} {v[0]:.1f} % ({v[1]})" for k, v in rec["median_error_pct"].items())
+        lines += ["", f"- pairs, both effects named where both are detectable: "
+                      f"{rec['pairs'][0]}/{rec['pairs'][1]}",
+                  f"- a false effect on a neo-Hookean draw: {rec['false_effect'][0]}/"
+                  f"{rec['false_effect'][1]}",
+                  f"- a wrong effect, not tied: {rec['wrong_not_tied'][0]}/"
+                  f"{rec['wrong_not_tied'][1]}",
+                  f"- median errors of the draws named right: {err or 'none'}",
+                  f"- CPU per diagnosis: median {rec['diagnosis_cpu_s'][0]:.0f} s, 90th "
+                  f"percentile {rec['diagnosis_cpu_s'][1]:.0f} s", ""]
+    lines.append(f"Failed draws: {s['failed']}.")
     return "\n".join(lines) + "\n"

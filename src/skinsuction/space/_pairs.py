@@ -446,11 +446,16 @@ class PairRayInterpolant(RayInterpolant):
     def combined_rays(self, theta) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
         n = theta.shape[0]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            logs = np.stack([np.log(s.combined_rays(theta[:, :3])[:, 1:]) for s in self._slices])
         start, w = self._axis_2.weights(theta[:, 3])
         outside = np.isnan(w[:, 0])
         m = self._axis_2.m
+        # only the slices a stencil can reach (a search narrows to a few of them)
+        inside = start[~outside] if (~outside).any() else start[:1]
+        lo, hi = max(0, int(inside.min()) - 2), min(len(self._slices), int(inside.max()) + m + 2)
+        logs = np.full((len(self._slices), n, self._g.shape[-1]), np.nan)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for j in range(lo, hi):
+                logs[j] = np.log(self._slices[j].combined_rays(theta[:, :3])[:, 1:])
         g = _combine_rows(logs, start, w, np.arange(n), m)
         bad = np.flatnonzero(np.isnan(g).any(axis=1) & ~outside)
         if bad.size:
