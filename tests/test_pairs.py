@@ -261,6 +261,15 @@ def test_the_second_effect_is_added_only_where_it_earns_its_place(c1, c2, effect
         paths = write_report(report, tmp_path)
         md = paths["md"].read_text()
         assert "## Second effect" in md and "**added**" in md
+        # a study's row carries both effects' parameters from the pair's fit
+        from skinsuction.cohort._rows import RESULT_COLUMNS, _diagnosis_columns
+
+        row = _diagnosis_columns(report)
+        assert set(row) <= set(RESULT_COLUMNS) and row["effects"] == ",".join(effects)
+        second = {"X2d": "lambda0", "lambda0": "X2d"}[row["extra_parameter"]]
+        assert row["extra2_parameter"] == second
+        assert row["extra2_value"] == added["parameters"][second]
+        assert row["extra2_lower"] <= row["extra2_value"] <= row["extra2_upper"]
     elif effects:
         # the pair was fitted but did not beat the stiffening alone
         assert step["added"] is None and step["options"]

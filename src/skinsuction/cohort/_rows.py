@@ -30,6 +30,8 @@ RESULT_COLUMNS = (
     "E_um", "noise_um", "noise_method", "misfit_scale", "at_bound",
     "systematic_misfit", "misfit_p_value", "cause", "effects", "verdict", "ambiguous_with",
     "extra_parameter", "extra_unit", "extra_value", "extra_lower", "extra_upper",
+    # a ramp's second effect (the pair's fit; extra_* are then the first effect's in it)
+    "extra2_parameter", "extra2_unit", "extra2_value", "extra2_lower", "extra2_upper",
     "gain_E_ratio", "delta_bic",
     # time curves: the spectrum, the instantaneous moduli, the R parameters (mean over the
     # cycles of the mode-1 curves) and the fit quality
@@ -157,13 +159,23 @@ def _diagnosis_columns(d: dict) -> dict:
            "verdict": d["verdict"],
            "ambiguous_with": ",".join(d.get("ambiguous_with") or [])}
     chosen = next((c for c in d["candidates"] if c["cause"] == d["cause"]), None)
+    added = (d.get("second_effect") or {}).get("added")
     if chosen is not None:
         x = chosen["extra_parameter"]
-        ci = (chosen.get("intervals") or {}).get(x["symbol"]) or {}
+        model = added or chosen
+        ci = (model.get("intervals") or {}).get(x["symbol"]) or {}
         out.update({"extra_parameter": x["symbol"], "extra_unit": x["unit"],
-                    "extra_value": x["value"], "extra_lower": ci.get("lower"),
-                    "extra_upper": ci.get("upper"),
-                    "gain_E_ratio": chosen["E_ratio"], "delta_bic": chosen["delta_bic"]})
+                    "extra_value": model["parameters"][x["symbol"]],
+                    "extra_lower": ci.get("lower"), "extra_upper": ci.get("upper"),
+                    "gain_E_ratio": d["gain"]["E_ratio"] if added else chosen["E_ratio"],
+                    "delta_bic": d["gain"]["delta_bic"] if added else chosen["delta_bic"]})
+    if added is not None:
+        second = next(c for c in d["candidates"] if c["cause"] == added["added"])
+        x = second["extra_parameter"]
+        ci = (added.get("intervals") or {}).get(x["symbol"]) or {}
+        out.update({"extra2_parameter": x["symbol"], "extra2_unit": x["unit"],
+                    "extra2_value": added["parameters"][x["symbol"]],
+                    "extra2_lower": ci.get("lower"), "extra2_upper": ci.get("upper")})
     return out
 
 
