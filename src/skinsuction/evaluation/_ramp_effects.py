@@ -20,9 +20,11 @@ An effect of the truth is *detectable* when, on the noise-free curves judged wit
 the noisy file's sd, the model of the true effects beats the model without it by
 the decision's ``|delta_bic|`` (the single causes' and the pairs' fits of that
 diagnosis).  :func:`ramp_effects_summary` gives, per design: each effect's rate
-named where detectable (right or tied), both effects of a pair named, false effects
-on the neo-Hookean draws, wrong effects not tied, the median errors of the draws
-named right, CPU per diagnosis.
+named where detectable (right or tied) beside its attribution ceiling (the mean over
+those draws of Phi(sqrt(g)/2), g the noise-free chi^2 gap to the best model that
+swaps the effect for another), both effects of a pair named, false effects on the
+neo-Hookean draws, wrong effects not tied, the median errors of the draws named
+right, CPU per diagnosis.
 """
 
 from __future__ import annotations
@@ -85,6 +87,25 @@ def _detectable(clean: dict, effects: list, delta_bic: float) -> dict:
     return out
 
 
+def _ceilings(clean: dict, effects: list) -> dict:
+    """Each true effect's attribution ceiling on the noise-free curves: Phi(sqrt(g) / 2),
+    g the chi^2 gap to the best model of as many effects that swaps it for another
+    (:func:`skinsuction.evaluation.attribution_ceiling`); NaN where none was fitted."""
+    from ._rates import attribution_ceiling
+
+    chi2 = {frozenset([c["cause"]]): c["fit"]["chi2"] for c in clean["candidates"]}
+    chi2.update({frozenset(o["effects"]): o["fit"]["chi2"]
+                 for o in clean["second_effect"]["options"]})
+    truth = frozenset(effects)
+    out = {}
+    for e in effects:
+        rivals = [v for k, v in chi2.items() if len(k) == len(truth) and e not in k
+                  and truth - {e} <= k]
+        out[e] = (float(attribution_ceiling(min(rivals) - chi2[truth]))
+                  if rivals and truth in chi2 else float("nan"))
+    return out
+
+
 def diagnose_ramp_draw(job) -> dict:
     """One draw, one design: FE curves, the diagnosis, the detectability; never raises
     (an FE or fit failure is the row's ``error``).
@@ -118,6 +139,8 @@ def diagnose_ramp_draw(job) -> dict:
                               on_demand=False)
         for e, ok in _detectable(clean, effects, Settings().delta_bic).items():
             row[f"detectable_{e}"] = ok
+        for e, c in _ceilings(clean, effects).items():
+            row[f"ceiling_{e}"] = c
         final = (r.get("extended") or {}).get("parameters") or r["baseline"]["parameters"]
         # a tied pair stands for its two causes
         tied = sorted({c for m in r.get("ambiguous_with") or [] for c in m.split("_and_")})
@@ -214,9 +237,13 @@ def ramp_effects_summary(frame: pd.DataFrame) -> dict:
             rows = [(r, n, tied) for (_, r), (n, t, tied) in zip(g.iterrows(), sets) if e in t]
             det = [(n, tied) for r, n, tied in rows if col in r and r[col] is True
                    or r.get(col) == 1]
+            ceil = [r.get(f"ceiling_{e}") for r, _, _ in rows
+                    if r.get(col) in (True, 1)]
+            ceil = [c for c in ceil if c is not None and np.isfinite(c)]
             rec["effects"][e] = {"with_effect": len(rows), "detectable": len(det),
                                  "named": sum(e in n for n, _ in det),
-                                 "right_or_tied": sum(e in n or e in tied for n, tied in det)}
+                                 "right_or_tied": sum(e in n or e in tied for n, tied in det),
+                                 "ceiling": float(np.mean(ceil)) if ceil else None}
         both = [(n, t) for (_, r), (n, t, _) in zip(g.iterrows(), sets)
                 if len(t) == 2 and all(r.get(f"detectable_{e}") in (True, 1) for e in t)]
         rec["pairs"] = [sum(t <= n for n, t in both), len(both)]
@@ -248,11 +275,12 @@ def ramp_effects_markdown(frame: pd.DataFrame) -> str:
         if design == "failed":
             continue
         lines += [f"## {design} ({rec['draws']} draws)", "",
-                  "| effect | draws with it | detectable | named | named or tied |",
-                  "|---|---|---|---|---|"]
+                  "| effect | draws with it | detectable | named | named or tied | ceiling |",
+                  "|---|---|---|---|---|---|"]
         for e, v in rec["effects"].items():
+            ceil = "–" if v["ceiling"] is None else f"{100 * v['ceiling']:.0f} %"
             lines.append(f"| {e} | {v['with_effect']} | {v['detectable']} | {v['named']} | "
-                         f"{v['right_or_tied']} |")
+                         f"{v['right_or_tied']} | {ceil} |")
         err = ", ".join(f"{k} {v[0]:.1f} % ({v[1]})" for k, v in rec["median_error_pct"].items())
         lines += ["", f"- pairs, both effects named where both are detectable: "
                       f"{rec['pairs'][0]}/{rec['pairs'][1]}",
