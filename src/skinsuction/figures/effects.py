@@ -1,9 +1,10 @@
-"""Single and paired effects in time curves: how often each is named.
+"""Single and paired effects in time curves or ramps: how often each is named.
 
 One panel per design: for each effect, the fraction of the draws where it is
 detectable that name it (dark) and that name it or tie it (light), with the counts;
 the draws with a wrong effect not tied and the elastic draws with a false effect as
-the last two bars (the summary of :func:`skinsuction.evaluation.effects_confusion_summary`).
+the last two bars (the summary of :func:`skinsuction.evaluation.effects_confusion_summary`
+or :func:`skinsuction.evaluation.ramp_effects_summary`).
 """
 
 from __future__ import annotations
