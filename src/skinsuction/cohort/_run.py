@@ -96,13 +96,8 @@ def run_study(path, out_dir, *, space_dir=None,
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     space, entries = _measurements(path, space_dir, space)
-    ray_spaces, settings = (_diagnosis(space_dir, ray_spaces, diagnosis_settings, level)
-                            if diagnose else (None, None))
-    pairs = None
-    if ray_spaces is not None:
-        from skinsuction.space import BASELINE, pairs_for
-
-        pairs = pairs_for(space_dir, ray_spaces[BASELINE].spec)
+    ray_spaces, pairs, settings = (_diagnosis(space_dir, ray_spaces, diagnosis_settings, level)
+                                   if diagnose else (None, None, None))
     rows = study_rows(entries, space=space, ray_spaces=ray_spaces, settings=settings,
                       pair_spaces=pairs,
                       repeats=repeats, seed=seed, level=level, workers=workers,
@@ -146,16 +141,18 @@ def _measurements(path, space_dir, space) -> tuple:
 
 
 def _diagnosis(space_dir, ray_spaces, diagnosis_settings, level) -> tuple:
-    """The ray spaces and the settings of the study's diagnoses."""
+    """The ray spaces, the pair spaces that go with them and the settings of the study's
+    diagnoses."""
     from skinsuction.diagnose import Settings
-    from skinsuction.space import read_ray_spaces
+    from skinsuction.space import BASELINE, pairs_for, read_ray_spaces
 
     ray_spaces = ray_spaces if ray_spaces is not None else read_ray_spaces(space_dir)
+    pairs = pairs_for(space_dir, ray_spaces[BASELINE].spec)
     # the study's default: one window focusing run per fit, no holdout (seconds saved
     # per measurement); any decision or fit key of the configuration overrides
     settings = Settings.from_config(None, {"holdout": False, "repeats": 1,
                                            **(diagnosis_settings or {})}, level=level)
-    return ray_spaces, settings
+    return ray_spaces, pairs, settings
 
 
 def _record(name, path, space_dir, space, space_info, settings, df, seconds, *, diagnose,

@@ -30,6 +30,8 @@ Modules:
 * ``_rays``: which rays a scale-free space has (ids, :class:`RaySpec`, FE jobs);
 * ``_ray_space``: the rays stored and read back (:class:`RaySpace`);
 * ``_ray_solve``, ``_ray_interpolate``: the rays solved and interpolated;
+* ``_pairs``, ``_pair_interpolate``: spaces of two causes at once, and read off
+  their nodes;
 * ``_on_demand``: rays at a measurement's own probe and layers, solved on
   demand and cached (:class:`OnDemandRays`);
 * ``_geometry``: the spaces of one measurement (:func:`spaces_at`);
@@ -84,13 +86,12 @@ from ._coordinates import SpaceCoordinates, load, reference_pressure, similar_le
 from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
 from ._open import LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
+from ._pair_interpolate import PairRayInterpolant, interpolant
 from ._pairs import (
     PAIRS_FOLDER,
     CausePair,
-    PairRayInterpolant,
     PairRaySpace,
     assemble_pair_space,
-    interpolant,
     pair_bundles,
     pair_from_config,
     pair_rays,
