@@ -167,29 +167,45 @@ def effects_confusion_study(per_class: int = 10, seed: int = 0, designs=None,
     pandas.DataFrame
         One row per (draw, design), failed ones with their ``error``.
     """
-    designs = list(designs or EFFECT_DESIGNS)
-    unknown = [d for d in designs if d not in EFFECT_DESIGNS]
+    jobs = draw_jobs(draw_effects, EFFECT_DESIGNS, designs, classes, per_class, seed,
+                     "effects_")
+    return run_jobs(diagnose_effect_draw, jobs, processes, progress)
+
+
+def draw_jobs(draw, all_designs: dict, designs, classes, per_class: int, seed: int,
+              prefix: str) -> list:
+    """``(design, probes, truth, effects, values, seed, folder)`` per draw and design.
+
+    ``draw(rng, truth)`` gives a draw's ``(effects, values)``; every draw is measured
+    by each of ``designs`` (keys of ``all_designs``, default all), its seed unique."""
+    designs = list(designs or all_designs)
+    unknown = [d for d in designs if d not in all_designs]
     if unknown:
-        raise ValueError(f"designs: unknown {unknown}; known: {list(EFFECT_DESIGNS)}")
+        raise ValueError(f"designs: unknown {unknown}; known: {list(all_designs)}")
     rng = np.random.default_rng(seed)
-    folder = tempfile.mkdtemp(prefix="effects_")
+    folder = tempfile.mkdtemp(prefix=prefix)
     jobs = []
     for _ in range(int(per_class)):
         for truth in classes:
-            effects, s = draw_effects(rng, truth)
+            effects, s = draw(rng, truth)
             for design in designs:
-                jobs.append((design, EFFECT_DESIGNS[design], truth, effects, s,
+                jobs.append((design, all_designs[design], truth, effects, s,
                              seed * 10000 + len(jobs), folder))
+    return jobs
+
+
+def run_jobs(run, jobs: list, processes: int = 1, progress=None) -> pd.DataFrame:
+    """``run(job)`` of every job (in forked workers if ``processes > 1``), by seed."""
     rows = []
     if processes > 1:
         with get_context("fork").Pool(processes) as pool:
-            for row in pool.imap_unordered(diagnose_effect_draw, jobs):
+            for row in pool.imap_unordered(run, jobs):
                 rows.append(row)
                 if progress:
                     progress(row)
     else:
         for job in jobs:
-            rows.append(diagnose_effect_draw(job))
+            rows.append(run(job))
             if progress:
                 progress(rows[-1])
     return pd.DataFrame(rows).sort_values(["seed"]).reset_index(drop=True)

@@ -29,13 +29,13 @@ right, CPU per diagnosis.
 
 from __future__ import annotations
 
-import tempfile
 import time
-from multiprocessing import get_context
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from ._effects import draw_jobs, run_jobs
 
 __all__ = ["RAMP_CLASSES", "RAMP_DESIGNS", "draw_ramp_effects", "diagnose_ramp_draw",
            "ramp_effects_study", "ramp_effects_summary", "ramp_effects_markdown"]
@@ -177,32 +177,9 @@ def ramp_effects_study(per_class: int = 10, seed: int = 0, designs=None,
     pandas.DataFrame
         One row per (draw, design), failed ones with their ``error``.
     """
-    designs = list(designs or RAMP_DESIGNS)
-    unknown = [d for d in designs if d not in RAMP_DESIGNS]
-    if unknown:
-        raise ValueError(f"designs: unknown {unknown}; known: {list(RAMP_DESIGNS)}")
-    rng = np.random.default_rng(seed)
-    folder = tempfile.mkdtemp(prefix="ramp_effects_")
-    jobs = []
-    for _ in range(int(per_class)):
-        for truth in classes:
-            effects, s = draw_ramp_effects(rng, truth)
-            for design in designs:
-                jobs.append((design, RAMP_DESIGNS[design], truth, effects, s,
-                             seed * 10000 + len(jobs), folder))
-    rows = []
-    if processes > 1:
-        with get_context("fork").Pool(processes) as pool:
-            for row in pool.imap_unordered(diagnose_ramp_draw, jobs):
-                rows.append(row)
-                if progress:
-                    progress(row)
-    else:
-        for job in jobs:
-            rows.append(diagnose_ramp_draw(job))
-            if progress:
-                progress(rows[-1])
-    return pd.DataFrame(rows).sort_values(["seed"]).reset_index(drop=True)
+    jobs = draw_jobs(draw_ramp_effects, RAMP_DESIGNS, designs, classes, per_class, seed,
+                     "ramp_effects_")
+    return run_jobs(diagnose_ramp_draw, jobs, processes, progress)
 
 
 def _sets(r):

@@ -40,7 +40,7 @@ import numpy as np
 import pandas as pd
 
 from ._causes import Cause
-from ._ray_space import RaySpace
+from ._ray_space import RaySpace, fill_rays
 from ._rays import RaySpec, _ray_params, bundle_id, ray_id
 from ._storage import _read_parquet, _write_parquet, round_sig
 
@@ -302,12 +302,6 @@ def assemble_pair_space(bundle_paths, singles: dict, out_path, spec: RaySpec, pa
         if s.spec.to_dict() != spec.to_dict():
             raise ValueError(f"{pair.name}: the {c.name} space was built with another ray "
                              "specification (rebuild it or the pair)")
-    by_id, solver = {}, {}
-    for path in bundle_paths:
-        frame, meta = _read_parquet(path)
-        for rid, g in frame.groupby("ray_id", sort=False):
-            by_id[rid] = g
-            solver[rid] = (meta.get("rays") or {}).get(rid, {})
     a, b = pair.causes
     n1, n2 = len(a.nodes), len(b.nodes)
     p = np.asarray(spec.pressures_mbar)
@@ -326,19 +320,9 @@ def assemble_pair_space(bundle_paths, singles: dict, out_path, spec: RaySpec, pa
                     arr[:, j] = second[:, own_b.index(c2)]
         arrays[probe] = arr
     rays = pair_rays(spec, pair)
-    for ray in rays:
-        frame = by_id.get(ray["ray_id"])
-        if frame is None:
-            raise ValueError(f"ray {ray['ray_id']} of the {pair.name} space is missing from "
-                             "the inputs")
-        fp = frame["pressure_mbar"].to_numpy(float)
-        if fp.shape != p.shape or not np.allclose(fp, p):
-            raise ValueError(f"ray {ray['ray_id']}: pressures differ from the specification "
-                             "(rebuild the rays)")
-        i = spec.ratio_nodes.index(ray["ratio"])
-        j = a.nodes.index(ray["coordinate"]) * n2 + b.nodes.index(ray["coordinate2"])
-        arrays[ray["probe_mm"]][i, j] = frame["deflection_mm"].to_numpy(float)
-    ray_info = {r["ray_id"]: solver[r["ray_id"]] for r in rays}
+    ray_info = fill_rays(bundle_paths, rays, arrays, spec, pair.name,
+                         lambda ray: (a.nodes.index(ray["coordinate"]) * n2
+                                      + b.nodes.index(ray["coordinate2"])))
     n_failed = sum(1 for r in ray_info.values() if not r.get("converged", False))
     space = PairRaySpace(a, spec, _pair_coordinates(pair), arrays, {}, second=b)
     frontier = coverage_frontier(space.slice_second(n2 - 1))

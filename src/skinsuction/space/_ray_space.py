@@ -189,6 +189,55 @@ def coverage_frontier(space: "RaySpace") -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def fill_rays(bundle_paths, rays: list, arrays: dict, spec: RaySpec, name: str,
+              column) -> dict:
+    """Put the rays of the bundle files into ``arrays[probe][ratio index, column(ray)]``.
+
+    Parameters
+    ----------
+    bundle_paths : iterable of path-like
+    rays : list of dict
+        The rays wanted (:func:`rays_of` or a pair's), each with ``ray_id``,
+        ``probe_mm`` and ``ratio``.
+    arrays : dict
+        ``{probe: (n_r, n_c, n_p)}``, filled in place.
+    spec : RaySpec
+    name : str
+        The space's name, for errors.
+    column : callable
+        The column of a ray.
+
+    Returns
+    -------
+    dict
+        ``{ray_id: solver record}``.
+
+    Raises
+    ------
+    ValueError
+        A ray missing from the bundles, or solved at other pressures.
+    """
+    by_id, solver = {}, {}
+    for path in bundle_paths:
+        frame, meta = _read_parquet(path)
+        for rid, g in frame.groupby("ray_id", sort=False):
+            by_id[rid] = g
+            solver[rid] = (meta.get("rays") or {}).get(rid, {})
+    p = np.asarray(spec.pressures_mbar)
+    for ray in rays:
+        frame = by_id.get(ray["ray_id"])
+        if frame is None:
+            raise ValueError(f"ray {ray['ray_id']} of the {name} space is missing from the "
+                             "inputs")
+        fp = frame["pressure_mbar"].to_numpy(float)
+        if fp.shape != p.shape or not np.allclose(fp, p):
+            raise ValueError(f"ray {ray['ray_id']}: pressures differ from the specification "
+                             "(rebuild the rays)")
+        i = spec.ratio_nodes.index(ray["ratio"])
+        arrays[ray["probe_mm"]][i, column(ray)] = frame["deflection_mm"].to_numpy(float)
+    return {r["ray_id"]: solver[r["ray_id"]] for r in rays}
+
+
 def assemble_ray_space(bundle_paths, out_path, spec: RaySpec, cause: Cause | None,
                        config: dict | None = None) -> RaySpace:
     """Assemble the bundle files of one model into its space file (atomic Parquet).
@@ -215,31 +264,14 @@ def assemble_ray_space(bundle_paths, out_path, spec: RaySpec, cause: Cause | Non
     """
     from skinsuction.provenance import collect
 
-    by_id, solver = {}, {}
-    for path in bundle_paths:
-        frame, meta = _read_parquet(path)
-        for rid, g in frame.groupby("ray_id", sort=False):
-            by_id[rid] = g
-            solver[rid] = (meta.get("rays") or {}).get(rid, {})
     p = np.asarray(spec.pressures_mbar)
     rays = rays_of(spec, cause)
     coords = np.array(cause.nodes if cause is not None else [math.nan])
     arrays = {probe: np.full((len(spec.ratio_nodes), coords.size, p.size), np.nan)
               for probe in spec.probes_mm}
     name = cause.name if cause else BASELINE
-    for ray in rays:
-        frame = by_id.get(ray["ray_id"])
-        if frame is None:
-            raise ValueError(f"ray {ray['ray_id']} of the {name} space is missing from the "
-                             "inputs")
-        fp = frame["pressure_mbar"].to_numpy(float)
-        if fp.shape != p.shape or not np.allclose(fp, p):
-            raise ValueError(f"ray {ray['ray_id']}: pressures differ from the specification "
-                             "(rebuild the rays)")
-        i = spec.ratio_nodes.index(ray["ratio"])
-        j = 0 if cause is None else cause.nodes.index(ray["coordinate"])
-        arrays[ray["probe_mm"]][i, j] = frame["deflection_mm"].to_numpy(float)
-    ray_info = {r["ray_id"]: solver[r["ray_id"]] for r in rays}
+    ray_info = fill_rays(bundle_paths, rays, arrays, spec, name,
+                         lambda ray: 0 if cause is None else cause.nodes.index(ray["coordinate"]))
     n_failed = sum(1 for r in ray_info.values() if not r.get("converged", False))
     space = RaySpace(cause, spec, coords, arrays, {"rays": ray_info})
     frontier = coverage_frontier(space)
