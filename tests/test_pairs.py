@@ -289,3 +289,87 @@ def test_no_second_effect_at_the_subjects_layers():
                          {}, {"p": object()})
     assert not step["tried"] and "subject's layers" in step["why"]
     assert not second_effect(Run(), [], {}, {})["tried"]
+
+
+# ------------------------------------------------------------- the shipped pair spaces
+def test_shipped_pairs_agree_with_their_provenance_and_the_single_spaces():
+    import fnmatch
+    import tomllib
+    from pathlib import Path
+
+    from skinsuction.space import (SHIPPED_SPACE_DIR, pairs_for, read_ray_spaces,
+                                   verify_shipped_files)
+
+    assert verify_shipped_files() == []
+    singles = read_ray_spaces(SHIPPED_SPACE_DIR)
+    pairs = pairs_for(None, singles[BASELINE].spec)
+    assert set(pairs) == {"strain_stiffening_and_pre_tension",
+                          "strain_stiffening_and_hypodermis_thickness"}
+    root = Path(__file__).resolve().parents[1]
+    patterns = tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"][
+        "package-data"]["skinsuction"]
+    for name, pair in pairs.items():
+        rel = f"data/scale_free/pairs/{name}.parquet"
+        assert any(fnmatch.fnmatch(rel, p) for p in patterns), rel
+        a, b = pair.pair.causes
+        j = b.nodes.index(b.neutral)
+        for probe in pair.probes_mm:
+            # the pair's edges are the single causes' rays, bit for bit
+            np.testing.assert_array_equal(pair.slice_second(j).rays(probe),
+                                          singles[a.name].rays(probe))
+            assert np.isfinite(pair.rays(probe)).mean() > 0.95
+
+
+def test_a_random_shipped_pair_ray_is_reproduced_by_the_fe_code():
+    from skinsuction.space import SHIPPED_SPACE_DIR, compute_ray, pairs_for, read_ray_spaces
+
+    spec = read_ray_spaces(SHIPPED_SPACE_DIR)[BASELINE].spec
+    rng = np.random.default_rng(20261127)
+    for pair in pairs_for(None, spec).values():
+        rays = [r for r in pair_rays(spec, pair.pair) if r["probe_mm"] == 2.0]
+        ray = rays[rng.integers(len(rays))]
+        curve, _, _ = compute_ray(ray["ray_id"], spec.pressures_mbar, spec.mesh,
+                                  list(spec.fallback))
+        a, b = pair.pair.causes
+        j = a.nodes.index(ray["coordinate"]) * len(b.nodes) + b.nodes.index(ray["coordinate2"])
+        kept = pair.rays(2.0)[spec.ratio_nodes.index(ray["ratio"]), j]
+        fresh = np.asarray(curve.deflection_mm, dtype=float)
+        ok = np.isfinite(kept)
+        assert np.array_equal(np.isfinite(fresh), ok), ray["ray_id"]
+        np.testing.assert_allclose(fresh[ok], kept[ok], rtol=1e-6, err_msg=ray["ray_id"])
+
+
+def test_ramp_effects_summary_counts_a_hand_made_table():
+    from skinsuction.evaluation import ramp_effects_summary
+
+    d = "ramp, 4 + 8 mm"
+    rows = [
+        # a pair, both detectable, both named
+        dict(truth="strain_stiffening+hypodermis_thickness", named="strain_stiffening,"
+             "hypodermis_thickness", detectable_strain_stiffening=True,
+             detectable_hypodermis_thickness=True, fit_x2d=0.33, x2d_mpa=0.3, fit_t_h=2.2,
+             t_h_mm=2.0),
+        # a pair, both detectable, one named: counts against the pairs
+        dict(truth="strain_stiffening+hypodermis_thickness", named="strain_stiffening",
+             detectable_strain_stiffening=True, detectable_hypodermis_thickness=True),
+        # a single effect named wrong but tied with the truth: not a wrong effect
+        dict(truth="pre_tension", named="dermis_thickness", ambiguous_with="pre_tension",
+             detectable_pre_tension=True),
+        # a wrong effect, not tied
+        dict(truth="pre_tension", named="hypodermis_thickness", detectable_pre_tension=False),
+        # neo-Hookean skins: one false effect
+        dict(truth="none", named=""), dict(truth="none", named="strain_stiffening"),
+    ]
+    base = dict(design=d, error=None, ambiguous_with="", x1d=0.05, fit_x1d=0.05,
+                diagnosis_cpu_s=5.0, fit_x2d=None, x2d_mpa=0.0, fit_lambda0=None, lambda0=1.0,
+                fit_t_h=None, t_h_mm=1.0)
+    s = ramp_effects_summary(pd.DataFrame([{**base, **r} for r in rows]))[d]
+    e = s["effects"]
+    assert (e["strain_stiffening"]["detectable"], e["strain_stiffening"]["named"]) == (2, 2)
+    assert (e["hypodermis_thickness"]["detectable"], e["hypodermis_thickness"]["named"]) == (2, 1)
+    assert e["pre_tension"] == {"with_effect": 2, "detectable": 1, "named": 0,
+                                "right_or_tied": 1, "ceiling": None}
+    assert s["pairs"] == [1, 2] and s["false_effect"] == [1, 2]
+    assert s["wrong_not_tied"] == [1, 4]
+    assert s["median_error_pct"]["X2d"][0] == pytest.approx(10.0)
+    assert s["median_error_pct"]["t_h"][0] == pytest.approx(10.0)
