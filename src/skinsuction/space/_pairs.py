@@ -48,7 +48,7 @@ log = logging.getLogger(__name__)
 
 __all__ = ["CausePair", "pair_from_config", "pairs_from_config", "pair_rays", "pair_bundles",
            "PairRaySpace", "assemble_pair_space", "read_pair_space", "read_pair_spaces",
-           "space_causes", "pairs_for", "PAIRS_FOLDER"]
+           "space_causes", "PAIRS_FOLDER"]
 
 #: The folder of a scale-free space that holds its pair spaces.
 PAIRS_FOLDER = "pairs"
@@ -395,31 +395,3 @@ def space_causes(space: RaySpace) -> tuple:
         return ()
     second = getattr(space, "second", None)
     return (space.cause,) if second is None else (space.cause, second)
-
-
-def pairs_for(space_dir, spec: RaySpec) -> dict:
-    """The pair spaces that go with a scale-free space of this specification.
-
-    Those of ``space_dir``'s ``pairs/`` folder, else those shipped with the package
-    (a workflow build of the single causes that did not build the pairs, target
-    ``scale_free_pairs``); only pairs built with the same ray specification.
-
-    Parameters
-    ----------
-    space_dir : path-like or None
-    spec : RaySpec
-        The single spaces' specification.
-
-    Returns
-    -------
-    dict
-        ``{name: PairRaySpace}``, possibly empty.
-    """
-    from ._shipped import SHIPPED_SPACE_DIR
-
-    for folder in ([Path(space_dir)] if space_dir is not None else []) + [SHIPPED_SPACE_DIR]:
-        found = {n: s for n, s in read_pair_spaces(folder).items()
-                 if s.spec.to_dict() == spec.to_dict()}
-        if found:
-            return found
-    return {}

@@ -51,7 +51,7 @@ log = logging.getLogger(__name__)
 __all__ = [
     "WORKFLOW_SPACE_DIR", "SHIPPED_SPACE_DIR", "PROVENANCE_FILE", "SpaceSource",
     "default_space_dir", "resolve_space", "shipped_provenance", "verify_shipped_files",
-    "ship_space", "ship_pair_spaces",
+    "ship_space", "ship_pair_spaces", "pairs_for",
 ]
 
 #: Where the workflow writes the scale-free space, relative to the working directory.
@@ -492,3 +492,31 @@ def ship_pair_spaces(built_dir, dest=SHIPPED_SPACE_DIR, *, build_command: str | 
         tmp.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     log.info("shipped %d pair spaces from %s to %s", len(files), src, out)
     return record
+
+
+def pairs_for(space_dir, spec: RaySpec) -> dict:
+    """The pair spaces that go with a scale-free space of this specification.
+
+    Those of ``space_dir``'s ``pairs/`` folder, else those shipped with the package
+    (a workflow build of the single causes that did not build the pairs, target
+    ``scale_free_pairs``); only pairs built with the same ray specification.
+
+    Parameters
+    ----------
+    space_dir : path-like or None
+    spec : RaySpec
+        The single spaces' specification.
+
+    Returns
+    -------
+    dict
+        ``{name: PairRaySpace}``, possibly empty.
+    """
+    from ._pairs import read_pair_spaces
+
+    for folder in ([Path(space_dir)] if space_dir is not None else []) + [SHIPPED_SPACE_DIR]:
+        found = {n: s for n, s in read_pair_spaces(folder).items()
+                 if s.spec.to_dict() == spec.to_dict()}
+        if found:
+            return found
+    return {}
