@@ -345,6 +345,8 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
                        error=" ".join(str(err).split()))
             return row
     row.update(named=rep["cause"], verdict=rep["verdict"], cpu_seconds=rep["cpu_seconds"],
+               # a second effect (the pair spaces) where one earned its place
+               effects=",".join(rep.get("effects") or []),
                wall_seconds=rep["seconds"],
                ambiguous_with=";".join(rep.get("ambiguous_with") or []),
                beyond=";".join(f"{b['model']}:{b['parameter']}:{b['side']}"
