@@ -179,6 +179,16 @@ def shipped_space_files(wildcards=None):
     )
 
 
+def pair_space_files(wildcards=None):
+    """The pair spaces a ramp's diagnosis reads: the workflow's build where it made them
+    (SF_PAIR_SPACES, scale_free.smk), else the shipped ones (inputs, so new pair spaces
+    rerun the diagnoses)."""
+    built = [p for p in globals().get("SF_PAIR_SPACES", []) if Path(p).is_file()]
+    if built:
+        return built
+    return sorted(str(p) for p in (SF_SHIPPED / "pairs").glob("*.parquet"))
+
+
 def config_file_of_space():
     """Which config/*.yaml alone gives this run's scale-free space (None: a custom one).
 

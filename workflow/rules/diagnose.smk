@@ -60,6 +60,7 @@ rule diagnose_measured:
     input:
         measured=lambda w: DG_MEASURED[w.name],
         spaces=SF_SPACES,
+        pairs=pair_space_files,
     output:
         json=report(
             "results/diagnosis/{name}/report.json",

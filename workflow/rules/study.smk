@@ -34,6 +34,7 @@ rule study:
     input:
         files=lambda w: STUDY_INPUTS[w.study],
         spaces=SF_SPACES,
+        pairs=pair_space_files,
     output:
         curves="results/studies/{study}/curves.parquet",
         comparison=report(
