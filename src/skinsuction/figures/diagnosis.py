@@ -48,13 +48,13 @@ def _first(report):
 
 
 #: Units of the fitted parameters.
-UNIT = {"X1d": "MPa", "X1h": "MPa", "X2d": "MPa", "t_d": "mm"}
+UNIT = {"X1d": "MPa", "X1h": "MPa", "X2d": "MPa", "t_d": "mm", "t_h": "mm"}
 
 
 def _params_label(params):
     unit = UNIT
     sym = {"X1d": "$X_1^d$", "X1h": "$X_1^h$", "X2d": "$X_2^d$", "t_d": "$t_d$",
-           "lambda0": r"$\lambda_0$"}
+           "t_h": "$t_h$", "lambda0": r"$\lambda_0$"}
     return ", ".join(f"{sym.get(k, k)} = {v:.3g}{' ' + unit[k] if k in unit else ''}"
                      for k, v in params.items())
 
@@ -89,14 +89,16 @@ def plot_fit(report: dict, title: str | None = None):
             ax.set_title(f"{probe} mm probe")
             ax.set_xlabel("suction pressure p (mbar)")
             ax.set_ylabel("apex deflection M (mm)")
-            ax.legend(loc="upper left", frameon=False)
+            ax.legend(loc="upper left", frameon=False, fontsize=6.5 if first is not None else None)
         fit_ci = (chosen or {}).get("intervals") or report["baseline"].get("intervals")
         if fit_ci and "error" not in fit_ci:
             names = [k for k in fit_ci if k in UNIT or k == "lambda0"]
             axes[0][-1].text(0.98, 0.3, interval_lines(fit_ci, names, {**UNIT, "lambda0": ""}),
                              transform=axes[0][-1].transAxes, ha="right", va="center",
                              fontsize=6.5, bbox=TEXT_BOX)
-        fig.suptitle(title or f"cause: {report['cause']}", fontsize=9)
+        effects = report.get("effects") or []
+        fig.suptitle(title or (f"effects: {' + '.join(effects)}" if len(effects) > 1
+                               else f"cause: {report['cause']}"), fontsize=9)
         fig.tight_layout()
     return fig
 
