@@ -142,6 +142,11 @@ def diagnose_ramp_draw(job) -> dict:
         for e, c in _ceilings(clean, effects).items():
             row[f"ceiling_{e}"] = c
         final = (r.get("extended") or {}).get("parameters") or r["baseline"]["parameters"]
+        ci = (r.get("extended") or {}).get("intervals") or r["baseline"].get("intervals") or {}
+        for key, col in (("X1d", "x1d"), ("X2d", "x2d"), ("lambda0", "lambda0"),
+                         ("t_h", "t_h")):
+            iv = ci.get(key) if isinstance(ci.get(key), dict) else {}
+            row[f"ci_{col}_lower"], row[f"ci_{col}_upper"] = iv.get("lower"), iv.get("upper")
         # a tied pair stands for its two causes
         tied = sorted({c for m in r.get("ambiguous_with") or [] for c in m.split("_and_")})
         row.update({"named": ",".join(r["effects"]), "verdict": r["verdict"],
@@ -238,9 +243,27 @@ def ramp_effects_summary(frame: pd.DataFrame) -> dict:
             errs[key] = ((f - 1) / (t - 1) - 1).abs() if e == PRE else (f / t - 1).abs()
         rec["median_error_pct"] = {k: [float(100 * v.median()), int(len(v))]
                                    for k, v in errs.items() if len(v)}
+        rec["coverage"] = _coverage(right)
         cpu = g["diagnosis_cpu_s"].astype(float)
         rec["diagnosis_cpu_s"] = [float(cpu.median()), float(cpu.quantile(0.9))]
         out[design] = rec
+    return out
+
+
+def _coverage(right: pd.DataFrame) -> dict:
+    """``{parameter: [covered, draws]}``: the 95 % intervals of the draws named right
+    that hold the truth (X1d always; each effect's parameter where it is true)."""
+    out = {}
+    for col, true, effect in (("x1d", "x1d", None), ("x2d", "x2d_mpa", STIFF),
+                              ("lambda0", "lambda0", PRE), ("t_h", "t_h_mm", THICK)):
+        lo, hi = f"ci_{col}_lower", f"ci_{col}_upper"
+        if lo not in right:
+            continue
+        sub = right if effect is None else right[right["truth"].str.contains(effect)]
+        sub = sub[sub[lo].notna() & sub[hi].notna()]
+        if len(sub):
+            inside = (sub[lo].astype(float) <= sub[true]) & (sub[true] <= sub[hi].astype(float))
+            out[col] = [int(inside.sum()), int(len(sub))]
     return out
 
 
@@ -266,6 +289,9 @@ def ramp_effects_markdown(frame: pd.DataFrame) -> str:
                   f"- a wrong effect, not tied: {rec['wrong_not_tied'][0]}/"
                   f"{rec['wrong_not_tied'][1]}",
                   f"- median errors of the draws named right: {err or 'none'}",
+                  "- their 95 % intervals holding the truth: " + (", ".join(
+                      f"{k} {v[0]}/{v[1]}" for k, v in rec.get("coverage", {}).items())
+                      or "none"),
                   f"- CPU per diagnosis: median {rec['diagnosis_cpu_s'][0]:.0f} s, 90th "
                   f"percentile {rec['diagnosis_cpu_s'][1]:.0f} s", ""]
     lines.append(f"Failed draws: {s['failed']}.")
