@@ -38,7 +38,8 @@ Modules:
 * ``_open``: either layout, per probe (:func:`load_space`);
 * ``_shipped``: the default space (the workflow's build in the working
   directory, else the one shipped with the package) and shipping a build;
-* ``_shipped_check``: a fresh build compared with the shipped space.
+* ``_shipped_check``: a fresh build compared with the shipped space;
+* ``_shipped_pairs``: the pair spaces that go with a space, and shipping them.
 
 Examples
 --------
@@ -127,13 +128,12 @@ from ._shipped import (
     WORKFLOW_SPACE_DIR,
     SpaceSource,
     default_space_dir,
-    pairs_for,
     resolve_space,
-    ship_pair_spaces,
     ship_space,
     shipped_provenance,
     verify_shipped_files,
 )
+from ._shipped_pairs import pairs_for, ship_pair_spaces
 from ._shipped_check import (
     SHIPPED_ATOL_MM,
     SHIPPED_RTOL,

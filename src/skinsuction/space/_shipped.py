@@ -51,7 +51,7 @@ log = logging.getLogger(__name__)
 __all__ = [
     "WORKFLOW_SPACE_DIR", "SHIPPED_SPACE_DIR", "PROVENANCE_FILE", "SpaceSource",
     "default_space_dir", "resolve_space", "shipped_provenance", "verify_shipped_files",
-    "ship_space", "ship_pair_spaces", "pairs_for",
+    "ship_space",
 ]
 
 #: Where the workflow writes the scale-free space, relative to the working directory.
@@ -415,108 +415,3 @@ def ship_space(built_dir, dest=SHIPPED_SPACE_DIR, *, config_file: str | None = N
     log.info("shipped %d files from %s to %s (commit %s)", len(names), built_dir, dest,
              record["git_commit"])
     return record
-
-
-def ship_pair_spaces(built_dir, dest=SHIPPED_SPACE_DIR, *, build_command: str | None = None,
-                     repo=None) -> dict:
-    """Copy the built pair spaces (``<built_dir>/pairs/*.parquet``) into ``dest/pairs``.
-
-    Their ``PROVENANCE.json`` records each file (SHA-256, rows, rays), the pairs,
-    the ray specification and the commits they were built and shipped from.  The
-    pairs must share the specification of the single spaces shipped in ``dest``.
-
-    Parameters
-    ----------
-    built_dir : path-like
-        The scale-free space's folder (its ``pairs/`` subfolder is shipped).
-    dest : path-like
-        The shipped space's folder (default: the package's).
-    build_command : str, optional
-        The command that built them, for the record.
-    repo : path-like, optional
-        The git repository whose commit is recorded.
-
-    Returns
-    -------
-    dict
-        The provenance record written.
-
-    Raises
-    ------
-    FileNotFoundError, ValueError
-        No pair built, or one of another ray specification than the shipped space.
-    """
-    from skinsuction import __version__
-    from skinsuction.provenance import git_info, jsonable
-
-    from ._pairs import PAIRS_FOLDER, read_pair_space
-
-    src, out = Path(built_dir) / PAIRS_FOLDER, Path(dest) / PAIRS_FOLDER
-    files = sorted(src.glob("*.parquet"))
-    if not files:
-        raise FileNotFoundError(f"{src}: no pair spaces to ship (build them first: "
-                                "`snakemake --cores 2 scale_free_pairs`)")
-    base = read_ray_space(Path(dest) / f"{BASELINE}.parquet")
-    pairs = {p.name: read_pair_space(p) for p in files}
-    for name, s in pairs.items():
-        if _normal(s.spec.to_dict()) != _normal(base.spec.to_dict()):
-            raise ValueError(f"{src / name}: its ray specification differs from the shipped "
-                             f"{BASELINE}.parquet's (ship the single spaces first)")
-    out.mkdir(parents=True, exist_ok=True)
-    for path in files:
-        with atomic_output(out / path.name) as tmp:
-            _write_compact(path, tmp)
-    for stale in out.glob("*.parquet"):
-        if stale.name not in pairs:
-            stale.unlink()
-    git = git_info(repo)
-    record = jsonable({
-        "what": "the pair spaces of skinsuction's default scale-free space: two causes at "
-                "once, every node of the first times the listed nodes of the second; read by "
-                "diagnose and study for the second effect of a ramp",
-        "skinsuction_version": __version__,
-        "shipped_from_commit": git.get("commit"), "shipped_from_dirty": git.get("dirty"),
-        "shipped_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "build_command": build_command,
-        "ray_spec": base.spec.to_dict(),
-        "files": {name: {"sha256": file_sha256(out / name),
-                         "bytes": (out / name).stat().st_size,
-                         "pair": s.pair.to_dict(),
-                         "built_at_commit": (s.metadata.get("git") or {}).get("commit"),
-                         "created_utc": s.metadata.get("created_utc"),
-                         "new_rays": int(s.metadata.get("n_rays", 0)),
-                         "stopped_early": int(s.metadata.get("n_stopped", 0))}
-                  for name, s in pairs.items()},
-    })
-    with atomic_output(out / PROVENANCE_FILE) as tmp:
-        tmp.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
-    log.info("shipped %d pair spaces from %s to %s", len(files), src, out)
-    return record
-
-
-def pairs_for(space_dir, spec: RaySpec) -> dict:
-    """The pair spaces that go with a scale-free space of this specification.
-
-    Those of ``space_dir``'s ``pairs/`` folder, else those shipped with the package
-    (a workflow build of the single causes that did not build the pairs, target
-    ``scale_free_pairs``); only pairs built with the same ray specification.
-
-    Parameters
-    ----------
-    space_dir : path-like or None
-    spec : RaySpec
-        The single spaces' specification.
-
-    Returns
-    -------
-    dict
-        ``{name: PairRaySpace}``, possibly empty.
-    """
-    from ._pairs import read_pair_spaces
-
-    for folder in ([Path(space_dir)] if space_dir is not None else []) + [SHIPPED_SPACE_DIR]:
-        found = {n: s for n, s in read_pair_spaces(folder).items()
-                 if s.spec.to_dict() == spec.to_dict()}
-        if found:
-            return found
-    return {}
