@@ -326,7 +326,12 @@ def test_a_random_shipped_pair_ray_is_reproduced_by_the_fe_code():
     spec = read_ray_spaces(SHIPPED_SPACE_DIR)[BASELINE].spec
     rng = np.random.default_rng(20261127)
     for pair in pairs_for(None, spec).values():
-        rays = [r for r in pair_rays(spec, pair.pair) if r["probe_mm"] == 2.0]
+        solver = pair.metadata["rays"]
+        # rays the default element carries to the end (a fallback's switch point moves
+        # with round-off between machines: the knife-edge rays of the single spaces)
+        rays = [r for r in pair_rays(spec, pair.pair) if r["probe_mm"] == 2.0
+                and solver[r["ray_id"]]["mesh_fallback"] == 0
+                and solver[r["ray_id"]]["converged"]]
         ray = rays[rng.integers(len(rays))]
         curve, _, _ = compute_ray(ray["ray_id"], spec.pressures_mbar, spec.mesh,
                                   list(spec.fallback))
