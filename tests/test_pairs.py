@@ -308,9 +308,14 @@ def test_shipped_pairs_agree_with_their_provenance_and_the_single_spaces():
     root = Path(__file__).resolve().parents[1]
     patterns = tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"][
         "package-data"]["skinsuction"]
-    for name, pair in pairs.items():
-        rel = f"data/scale_free/pairs/{name}.parquet"
+    files = sorted((SHIPPED_SPACE_DIR / "pairs").glob("*.parquet"))
+    for path in files:
+        rel = f"data/scale_free/pairs/{path.name}"
         assert any(fnmatch.fnmatch(rel, p) for p in patterns), rel
+        assert path.stat().st_size < 2e6, path  # one file per pair and probe keeps them small
+    assert len(files) == 8
+    for name, pair in pairs.items():
+        assert pair.probes_mm == (2.0, 4.0, 6.0, 8.0), name  # the probes' files read together
         a, b = pair.pair.causes
         j = b.nodes.index(b.neutral)
         for probe in pair.probes_mm:

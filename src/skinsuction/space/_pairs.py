@@ -385,7 +385,13 @@ def read_pair_spaces(space_dir) -> dict:
         except Exception as err:  # pyarrow raises many types for a bad file
             raise ValueError(f"{path}: not a pair space ({type(err).__name__}: "
                              f"{' '.join(str(err).split())[:200]})") from None
-        out[s.name] = s
+        if s.name in out:  # a shipped pair is one file per probe: put them together
+            first = out[s.name]
+            first.deflection_mm.update(s.deflection_mm)
+            first.metadata["rays"] = {**first.metadata.get("rays", {}),
+                                      **s.metadata.get("rays", {})}
+        else:
+            out[s.name] = s
     return out
 
 

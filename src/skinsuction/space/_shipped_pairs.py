@@ -18,7 +18,7 @@ from ._causes import BASELINE
 from ._pairs import PAIRS_FOLDER, read_pair_space, read_pair_spaces
 from ._ray_space import read_ray_space
 from ._rays import RaySpec
-from ._shipped import PROVENANCE_FILE, SHIPPED_SPACE_DIR, _normal, _write_compact
+from ._shipped import PROVENANCE_FILE, SHIPPED_SPACE_DIR, _normal
 
 log = logging.getLogger(__name__)
 
@@ -95,11 +95,14 @@ def ship_pair_spaces(built_dir, dest=SHIPPED_SPACE_DIR, *, build_command: str | 
             raise ValueError(f"{src / name}: its ray specification differs from the shipped "
                              f"{BASELINE}.parquet's (ship the single spaces first)")
     out.mkdir(parents=True, exist_ok=True)
-    for path in files:
-        with atomic_output(out / path.name) as tmp:
-            _write_compact(path, tmp)
+    written = {}
+    for s in pairs.values():
+        for probe in s.probes_mm:
+            name = f"{s.name}__p{probe:g}.parquet"
+            _write_probe(s, probe, out / name)
+            written[name] = s
     for stale in out.glob("*.parquet"):
-        if stale.name not in pairs:
+        if stale.name not in written:
             stale.unlink()
     git = git_info(repo)
     record = jsonable({
@@ -116,11 +119,34 @@ def ship_pair_spaces(built_dir, dest=SHIPPED_SPACE_DIR, *, build_command: str | 
                          "pair": s.pair.to_dict(),
                          "built_at_commit": (s.metadata.get("git") or {}).get("commit"),
                          "created_utc": s.metadata.get("created_utc"),
-                         "new_rays": int(s.metadata.get("n_rays", 0)),
-                         "stopped_early": int(s.metadata.get("n_stopped", 0))}
-                  for name, s in pairs.items()},
+                         "new_rays_all_probes": int(s.metadata.get("n_rays", 0)),
+                         "stopped_early_all_probes": int(s.metadata.get("n_stopped", 0))}
+                  for name, s in written.items()},
     })
     with atomic_output(out / PROVENANCE_FILE) as tmp:
         tmp.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
-    log.info("shipped %d pair spaces from %s to %s", len(files), src, out)
+    log.info("shipped %d pair spaces (%d files) from %s to %s", len(files), len(written), src,
+             out)
     return record
+
+
+#: What the shipped copy keeps of each ray's solver record (the rest, e.g. the skin of
+#: its curve, repeats the ray id).
+SOLVER_KEYS = ("converged", "mesh_fallback", "last_converged_mbar", "reason", "seconds")
+
+
+def _write_probe(space, probe: float, path: Path) -> None:
+    """One probe's rays of a pair space, its solver records cut to :data:`SOLVER_KEYS`:
+    a file per probe keeps the shipped files small (read back together by
+    :func:`skinsuction.space.read_pair_spaces`)."""
+    from ._pairs import PairRaySpace
+    from ._storage import _write_parquet
+
+    one = PairRaySpace(space.cause, space.spec, space.coordinates,
+                       {probe: space.rays(probe)}, {}, second=space.second)
+    tag = f"p{probe:g}_"
+    meta = {**{k: v for k, v in space.metadata.items() if k != "rays"},
+            "rays": {rid: {k: rec.get(k) for k in SOLVER_KEYS}
+                     for rid, rec in space.metadata.get("rays", {}).items()
+                     if rid.startswith(tag)}}
+    _write_parquet(one.frame(), path, meta)  # atomic
