@@ -85,7 +85,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
         report["ambiguous_with"] = step["ambiguous_with"]
         step["added"].pop("_fit")
     report["second_effect"] = step
-    report["steps"] = _steps_json(base, candidates, report, step)
+    report["steps"] = _steps_json(candidates, report, step)
     report.update({"summary": None, "settings": {**asdict(settings), "n_points": run.n_points},
                    "spaces": _spaces_json(run.spaces), "seconds": None})
     report["summary"] = summary_text(report)
@@ -170,7 +170,7 @@ def _verdict(base, candidates, best, cause, verdict, ambiguous, beyond) -> dict:
     }
 
 
-def _steps_json(base, candidates: list, report: dict, step: dict) -> list:
+def _steps_json(candidates: list, report: dict, step: dict) -> list:
     """The model built effect by effect: each step's options and the effect it added."""
     first = {"step": 1, "from": BASELINE,
              "added": report["effects"][0] if report["effects"] else None,
