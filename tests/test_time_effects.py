@@ -131,9 +131,13 @@ def test_two_probes_tell_that_the_hypodermis_creeps(space, tmp_path):
     cl = r["creep_layers"]
     assert r["effects"] == [VISCOELASTIC_CREEP], r["summary"]
     assert cl["tested"] and cl["decisive"] and cl["creeping"] == "hypodermis", r["summary"]
-    g = cl["intervals"]["g_hypodermis"]
+    g, gd = cl["intervals"]["g_hypodermis"], cl["intervals"]["g_dermis"]
     assert g["lower"] <= 1.0 <= g["upper"]
-    assert cl["intervals"]["g_dermis"]["upper"] < g["lower"]
+    # the dermis is not shown to creep (its term may sit at tau's lower edge, where g
+    # only trades with the instantaneous modulus and its interval opens)
+    assert gd["lower"] < 0.05 and gd["estimate"] < 0.1 * g["estimate"]
+    # each fit corrected by FE time solves, under the data's own model error
+    assert cl["fe_correction"]["per_layer"]["applied"]
     assert cl["beta"]["2"] < 0.3 < 0.6 < cl["beta"]["8"]
 
 

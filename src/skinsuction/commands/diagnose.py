@@ -101,6 +101,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_level(p, default=d.level,
               help="confidence level of the profile-likelihood intervals of every fit "
                    f"(default {d.level:g})")
+    p.add_argument("--fe-correction", type=int, choices=range(6), default=d.fe_correction,
+                   metavar="STEPS",
+                   help="time curves: steps of the FE correction of every fit with creep "
+                        "(FE time solves at the fit remove the fast path's error; 0: the "
+                        f"fast path alone; default {d.fe_correction})")
     p.add_argument("--no-holdout", action="store_true",
                    help="skip the cross-probe holdout (faster)")
     add_geometry_arguments(p)
@@ -125,7 +130,8 @@ def run(args: argparse.Namespace) -> int:
     settings = Settings(alpha=args.alpha, delta_bic=args.delta_bic, noise_um=args.noise_um,
                         model_error_um=args.model_error_um, repeats=args.repeats,
                         seed=args.seed, holdout=not args.no_holdout,
-                        level=args.level, pattern_gate=args.pattern_gate)
+                        level=args.level, pattern_gate=args.pattern_gate,
+                        fe_correction=args.fe_correction)
     data = read_measurement(args.measured)
     if isinstance(data, MeasuredTimeData):
         return _run_time(args, settings, data)

@@ -93,6 +93,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="time curves: an elastic effect fitted with the spectrum, e.g. "
                         "strain_stiffening (X2d identified too; `diagnose` chooses the "
                         "effects itself)")
+    p.add_argument("--fe-correction", type=int, choices=range(6), default=2, metavar="STEPS",
+                   help="time curves: steps of the FE correction of the fit (FE time solves "
+                        "at the fit remove the fast path's error; about 2-5 s of CPU a step "
+                        "and curve; 0: the fast path alone; default 2)")
     p.add_argument("--phases", choices=("all", "on"), default="all",
                    help="time curves: fit every point, with the fast path's model error per "
                         "phase in the likelihood (all, default), or only while the suction "
@@ -229,7 +233,8 @@ def _run_time(args: argparse.Namespace, data) -> int:
         probes=None if args.probe is None else [args.probe], curve=args.curve,
         repeats=repeats, seed=args.seed, noise_um=args.noise_um, level=args.level,
         phases=args.phases, thickness=thickness_from_args(args),
-        solve_on_demand=not args.no_solve, workers=args.workers, effect=args.effect)
+        solve_on_demand=not args.no_solve, workers=args.workers, effect=args.effect,
+        fe_correction=args.fe_correction)
     with writing(args.out):
         paths = write_identification(result, args.out)
     _print_time(result)

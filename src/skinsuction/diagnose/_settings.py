@@ -72,6 +72,10 @@ class Settings:
     time_causes : list of str or None
         The elastic causes a time-curve diagnosis tries beside creep (their rays
         beside the scale-free space); None: every one there.
+    fe_correction : int
+        Time curves: steps of the FE correction of each fit with creep (FE time
+        solves at the fit remove the fast path's error,
+        :func:`skinsuction.identify.fe_corrected_fit`); 0: the fast path alone.
     """
 
     alpha: float = 0.01
@@ -91,6 +95,7 @@ class Settings:
     pattern_gate: bool = False
     time_causes: tuple | None = None
     layer_test: bool = True
+    fe_correction: int = 2
 
     def __post_init__(self):
         if not 0 < self.alpha < 1:
@@ -113,6 +118,9 @@ class Settings:
                 isinstance(c, str) for c in self.time_causes)):
             raise ValueError(f"time_causes must be a list of cause names or None, got "
                              f"{self.time_causes!r}")
+        if int(self.fe_correction) != self.fe_correction or not 0 <= self.fe_correction <= 5:
+            raise ValueError(f"fe_correction must be a whole number of steps in 0..5, got "
+                             f"{self.fe_correction!r}")
         if self.cause_window_decades is not None and not self.cause_window_decades > 0:
             raise ValueError("cause_window_decades must be positive or None, got "
                              f"{self.cause_window_decades}")

@@ -33,7 +33,6 @@ import numpy as np
 from scipy import stats
 
 from skinsuction.errors import InputError
-from skinsuction.model import Prony, Skin
 
 from ._diagnose import Settings
 from ._stats import bic
@@ -69,15 +68,10 @@ def _fit_json(fit, data, name) -> dict:
 
 
 def _skin_of(parameters, geometry, bottom, cause=None) -> dict:
-    """The skin of a time fit (long-time moduli, the spectrum on both layers if any,
-    the elastic cause's parameter if any)."""
-    spectrum = (Prony(parameters["g"], parameters["tau_s"]) if parameters.get("g")
-                else Prony())
-    skin = Skin.two_layer(parameters["X1d"], parameters["X1h"], t_d=geometry.t_d,
-                          t_h=geometry.t_h, bottom=bottom, spectrum=spectrum)
-    if cause is not None:
-        skin = skin.replace({path: parameters[cause.symbol] for path in cause.paths})
-    return skin.to_dict()
+    """The skin of a time fit as a dict (:func:`skinsuction.identify.time_fit_skin`)."""
+    from skinsuction.identify import time_fit_skin
+
+    return time_fit_skin(parameters, geometry, bottom, cause).to_dict()
 
 
 def _bound_flags(fd, models, warnings) -> dict:
@@ -151,7 +145,9 @@ def _model_json(m, fd, prep, settings, rays_cause) -> dict:
     js = _fit_json(m.fit, fd, m.name)
     js["effects"] = list(m.effects)
     js["skin"] = _skin_of(js["parameters"], prep["geometry"], prep["space"].bottom, rays_cause)
-    js["intervals"] = laplace_intervals(m.rays, fd, m.fit, level=settings.level)
+    # with the FE correction, the intervals hold the fast path's error at the fit
+    js["intervals"] = laplace_intervals(m.rays, m.data or fd, m.fit, level=settings.level)
+    js["fe_correction"] = m.correction
     return js
 
 
@@ -255,6 +251,7 @@ def _judge(run: _Run, fd, settings, warnings) -> dict:
 
     base, visco, final = run.base, run.visco, run.final
     el, ve = _fit_json(base.fit, fd, "elastic"), _fit_json(visco.fit, fd, VISCOELASTIC_CREEP)
+    ve["fe_correction"] = visco.correction
     fin = run.model_json(final)
     effects = physical_effects(final.effects)
     misfit = el["misfit_p"] < settings.alpha
@@ -283,6 +280,8 @@ def _judge(run: _Run, fd, settings, warnings) -> dict:
                         f"{min(o['delta_bic'] for o in run.sel['steps'][0]['options']):+.1f} > "
                         f"{settings.delta_bic:g}): unexplained misfit")
     warnings += [f"pattern: {p}" for p in patterns]
+    warnings += [f"FE correction: {n}" for n in run.fitter.notes
+                 if "the FE correction stopped" in n]
     return {"el": el, "ve": ve, "fin": fin, "effects": effects, "misfit": misfit,
             "verdict": verdict, "at_bound": at_bound, "beyond": beyond,
             "patterns": patterns, "warnings": warnings}
@@ -321,7 +320,8 @@ def _assemble(data, prep, settings, run: _Run, j: dict) -> dict:
         "ambiguous_with": sorted({e for s in steps for e in s["ambiguous_with"]}),
         "elastic": j["el"], "viscoelastic": j["ve"],
         "gain": _gain(j["el"], j["ve"], j["fin"] if effects else j["ve"]),
-        "intervals": laplace_intervals(visco.rays, fd, visco.fit, level=settings.level),
+        "intervals": laplace_intervals(visco.rays, visco.data or fd, visco.fit,
+                                       level=settings.level),
         "patterns": j["patterns"],
         "decision": {"alpha": settings.alpha, "delta_bic": settings.delta_bic,
                      "ambiguity_bic": settings.ambiguity_bic,

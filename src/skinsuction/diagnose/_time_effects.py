@@ -31,8 +31,9 @@ left per phase.
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import stats
@@ -77,7 +78,9 @@ def _elastic(key):
 
 @dataclass
 class TimeModel:
-    """One fitted model: its effects (in the order added), the fit, the rays it used."""
+    """One fitted model: its effects (in the order added), the fit, the rays it used;
+    with the FE correction, the data less the fast path's error (``data``) and the
+    correction's record (``correction``)."""
 
     effects: tuple
     fit: object  # TimeFit
@@ -85,6 +88,8 @@ class TimeModel:
     chi2: float
     n_params: int
     n_points: int
+    data: list | None = field(default=None, repr=False)
+    correction: dict | None = None
 
     @property
     def name(self) -> str:
@@ -117,6 +122,10 @@ class EffectFitter:
     settings : Settings
     causes : list of str
         The elastic causes tried (their rays: ``prep["space"].cause_rays``).
+
+    With ``settings.fe_correction`` steps, every fit with creep is corrected by FE
+    time solves at the fit (:func:`skinsuction.identify.fe_corrected_fit`); an
+    elastic fit needs none (the fast path is then the rays themselves).
     """
 
     def __init__(self, prep: dict, settings, causes):
@@ -167,13 +176,38 @@ class EffectFitter:
             starts = [s for s in (self._start(key, m) for m in nested) if s is not None]
             fit = fit_time_model(rays, self.data, terms=terms, seed=self._seed_of(key),
                                  repeats=self.settings.repeats, starts=starts[:2])
+            data, correction = self.data, None
+            if terms and self.settings.fe_correction:
+                fit, data, correction = self._corrected(fit, rays, cause, key)
             self._cache[key] = TimeModel(tuple(effects), fit, rays, float(fit.chi2),
-                                         int(fit.n_params), int(fit.n_points))
+                                         int(fit.n_params), int(fit.n_points), data,
+                                         correction)
         model = self._cache[key]
         if model.effects != tuple(effects):  # the same fit, named in this order
-            model = TimeModel(tuple(effects), model.fit, model.rays, model.chi2,
-                              model.n_params, model.n_points)
+            model = dataclasses.replace(model, effects=tuple(effects))
         return model
+
+    def _corrected(self, fit, rays, cause, key, data=None, layers=False):
+        """The fit corrected by FE time solves; the fast fit, said so, if one stops."""
+        from skinsuction.identify import fe_corrected_fit, time_fit_skin
+
+        c = rays[self.probes[0]].cause if cause is not None else None
+        geometry, bottom = self.prep["geometry"], self.prep["space"].bottom
+
+        def skin_of(parameters):
+            return time_fit_skin(parameters, geometry, bottom, c)
+
+        data = self.data if data is None else data
+        try:
+            return fe_corrected_fit(rays, data, fit, skin_of,
+                                    iterations=self.settings.fe_correction,
+                                    seed=self._seed_of(key), layers=layers)
+        except RuntimeError as err:
+            note = (f"{model_name(key)}{' (a spectrum per layer)' if layers else ''}: the FE "
+                    f"correction stopped ({err}); the fit is the fast path's, with its model "
+                    "error")
+            self.notes.append(note)
+            return fit, data, {"applied": False, "reason": note}
 
     def _start(self, key, nested: TimeModel):
         """A start for ``key`` from a fitted model nested in it: the nested theta with
@@ -196,9 +230,11 @@ class EffectFitter:
 
 def _option(model: TimeModel, parent: TimeModel, settings) -> dict:
     d = model.bic - parent.bic
+    corr = model.correction or {}
     return {"model": model.name, "effects": list(model.effects), "chi2": model.chi2,
             "bic": model.bic, "delta_bic": float(d), "delta_chi2": model.chi2 - parent.chi2,
-            "decisive": bool(d <= settings.delta_bic and parent.misfit_p < settings.alpha)}
+            "decisive": bool(d <= settings.delta_bic and parent.misfit_p < settings.alpha),
+            "fast_path_chi2": corr["chi2"][0] if corr.get("applied") else None}
 
 
 def select_effects(fitter: EffectFitter, settings) -> dict:
@@ -340,8 +376,10 @@ def _creeping(iv: dict, decisive: bool) -> str:
 
 def layer_test(fitter: EffectFitter, final: TimeModel, settings) -> dict:
     """Which layer creeps: the final model's spectrum shared by both layers against one
-    spectrum per layer (one term each), both under the per-layer fast path's larger
-    model error (:data:`skinsuction.identify.MODEL_ERROR_LAYERS`).
+    spectrum per layer (one term each).  With ``settings.fe_correction`` each fit is
+    corrected by FE time solves with a spectrum per layer and held to the data's own
+    model error; without, both are under the per-layer fast path's larger model error
+    (:data:`skinsuction.identify.MODEL_ERROR_LAYERS`: a screen).
 
     Two probes of different apertures are needed: a small one sees mostly the dermis, a
     large one the hypodermis too (the hypodermis's share of the compliance, ``beta``,
@@ -373,23 +411,37 @@ def layer_test(fitter: EffectFitter, final: TimeModel, settings) -> dict:
         return {"tested": False,
                 "reason": "one probe cannot tell which layer creeps: its curve sees one "
                           "mix of the layers (measure a second aperture, e.g. 2 + 8 mm)"}
-    data = [fit_data_of(c, noise_sd_mm=d.noise_sd_mm, model_error=MODEL_ERROR_LAYERS)
-            for c, d in zip(fitter.prep["curves"], fitter.data)]
+    corrected = bool(settings.fe_correction)
+    # corrected by FE time solves, the per-layer model is held to the data's own model
+    # error; the fast path alone needs its larger one
+    data = (fitter.data if corrected else
+            [fit_data_of(c, noise_sd_mm=d.noise_sd_mm, model_error=MODEL_ERROR_LAYERS)
+             for c, d in zip(fitter.prep["curves"], fitter.data)])
     rays = final.rays
-    k0 = 2 + (final.elastic_cause is not None)
+    cause = final.elastic_cause
+    k0 = 2 + (cause is not None)
     theta = np.asarray(final.fit.theta, dtype=float)
     start = theta[:k0 + 2]  # the first (fastest) creep term of the final model
     seed = np.random.SeedSequence(int(settings.seed), spawn_key=(99,))
     s_shared, s_layers = seed.spawn(2)
-    shared = fit_time_model(rays, data, terms=1, seed=s_shared, repeats=settings.repeats,
-                            starts=[start])
+    records = {}
+
+    def fit(name, rays_, start_, seed_, per_layer, cause_):
+        f = fit_time_model(rays_, data, terms=1, seed=seed_, repeats=settings.repeats,
+                           starts=[start_], layers=per_layer)
+        if not corrected:
+            return f, data
+        key = (VISCOELASTIC_CREEP,) + ((cause_,) if cause_ else ())
+        f, fd, records[name] = fitter._corrected(f, rays_, cause_, key, data, per_layer)
+        return f, fd
+
+    shared, _ = fit("shared", rays, start, s_shared, False, cause)
     layered_start = np.concatenate([shared.theta, shared.theta[k0:k0 + 2]])
-    layers = fit_time_model(rays, data, terms=1, seed=s_layers, repeats=settings.repeats,
-                            starts=[layered_start], layers=True)
+    layers, layers_data = fit("per_layer", rays, layered_start, s_layers, True, cause)
     b_shared = bic(shared.chi2, shared.n_params, shared.n_points)
     b_layers = bic(layers.chi2, layers.n_params, layers.n_points)
     delta = float(b_layers - b_shared)
-    iv = laplace_intervals(rays, data, layers, level=settings.level)
+    iv = laplace_intervals(rays, layers_data, layers, level=settings.level)
     p = layers.parameters
     model = TimeCurveModel(rays, data, 1, layers=True)
     beta = {f"{d.probe_mm:g}": float(model.hypodermis_share(layers.theta[None], d.probe_mm,
@@ -399,12 +451,9 @@ def layer_test(fitter: EffectFitter, final: TimeModel, settings) -> dict:
     creeping = _creeping(iv, decisive)
     # does the elastic effect still earn its place once each layer has its spectrum?
     elastic_check = None
-    cause = final.elastic_cause
     if decisive and cause is not None:
-        nh = fitter.rays[None]
-        start_nh = np.delete(layers.theta, 2)
-        plain = fit_time_model(nh, data, terms=1, seed=seed.spawn(1)[0],
-                               repeats=settings.repeats, starts=[start_nh], layers=True)
+        plain, _ = fit("without_elastic_effect", fitter.rays[None], np.delete(layers.theta, 2),
+                       seed.spawn(1)[0], True, None)
         d_plain = float(b_layers - bic(plain.chi2, plain.n_params, plain.n_points))
         elastic_check = {"effect": cause, "delta_bic_without": d_plain,
                          "earns_its_place": bool(d_plain <= settings.delta_bic),
@@ -419,6 +468,10 @@ def layer_test(fitter: EffectFitter, final: TimeModel, settings) -> dict:
             "shared": {"chi2": float(shared.chi2), "bic": float(b_shared),
                        "parameters": shared.parameters},
             "chi2": float(layers.chi2), "bic": float(b_layers), "beta": beta,
-            "model_error": dict(MODEL_ERROR_LAYERS),
-            "reason": "a spectrum per layer against one for both, each under the per-layer "
-                      "fast path's model error (2 % of the curve; docs/effects.md)"}
+            "model_error": (dict(data[0].model_error) if corrected
+                            else dict(MODEL_ERROR_LAYERS)),
+            "fe_correction": records or None,
+            "reason": ("a spectrum per layer against one for both, each fit corrected by FE "
+                       "time solves (docs/effects.md)" if corrected else
+                       "a spectrum per layer against one for both, each under the per-layer "
+                       "fast path's model error (2 % of the curve; docs/effects.md)")}

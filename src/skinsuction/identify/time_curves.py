@@ -3,7 +3,8 @@
 What ``skinsuction identify TIME_CURVES.csv`` runs: read the curves
 (:func:`skinsuction.measured.load_time_curves`), take the space at the subject's
 layers, fit the long-time moduli and one or two Prony terms with the fast path
-(:func:`skinsuction.identify._time_fit.fit_time_model`), put Laplace intervals on
+(:func:`skinsuction.identify._time_fit.fit_time_model`), correct that fit by FE time
+solves at it (:func:`skinsuction.identify.fe_corrected_fit`), put Laplace intervals on
 every parameter, flag edges, and report the R parameters beside them
 (:func:`identify_time_data`: a :class:`~skinsuction.identify.TimeIdentification`);
 write ``identification.json`` and a fit figure (:func:`write_time_identification`,
@@ -184,7 +185,8 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
                        level: float = 0.95, phases: str = "all", thickness=None,
                        ue_time_s: float = 0.1,
                        window_focusing: dict | None = None,
-                       effect: str | None = None) -> TimeIdentification:
+                       effect: str | None = None,
+                       fe_correction: int = 2) -> TimeIdentification:
     """Identify X1d, X1h (long-time) and ``terms`` Prony terms of loaded time curves.
 
     The steps: read and check (:func:`prepare_time_fit`), fit
@@ -224,6 +226,10 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
         An elastic cause fitted with the spectrum (e.g. ``"strain_stiffening"``: the
         fast path then drives the stiffening skin's elastic curve, and X2d is
         identified with its interval); its rays must lie beside the space.
+    fe_correction : int
+        Steps of the FE correction of the fit (FE time solves at the fit remove the
+        fast path's error, :func:`~skinsuction.identify.fe_corrected_fit`); 0: the
+        fast path alone.
 
     Returns
     -------
@@ -236,6 +242,7 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
         ``identification.json``.
     """
     _check(terms, repeats, seed, noise_um, level, phases)
+    _check_steps(fe_correction)
     prep = prepare_time_fit(data, space, probes=probes, curve=curve, noise_um=noise_um,
                             phases=phases, thickness=thickness)
     rays, fit_data, warnings = prep["rays"], prep["data"], prep["warnings"]
@@ -251,20 +258,52 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
                              window_focusing_options=wf)
     except IdentificationError as err:
         raise InputError(f"{data.path}: beyond the simulated space: {err}") from None
-    intervals = laplace_intervals(rays, fit_data, fit, level=level)
+    # the intervals hold the fast path's error at the fit (the data less it)
+    fit, corrected, correction = _corrected(prep, rays, fit_data, fit, fe_correction, seed,
+                                            warnings)
+    intervals = laplace_intervals(rays, corrected, fit, level=level)
     flags = _flag_bounds(rays, fit_data, fit, intervals, warnings)
     _interval_notes(fit_data, fit, intervals, flags, warnings)
     settings = {"terms": int(terms), "repeats": int(repeats), "seed": int(seed),
                 "phases": phases, "level": float(level), "window_focusing": wf,
                 "g_bounds": list(G_BOUNDS), "tau_bounds_s": list(TAU_BOUNDS_S),
                 "probes_mm": [c.probe_mm for c in prep["curves"]], "curve": curve,
-                "ue_time_s": float(ue_time_s), "effect": effect}
+                "ue_time_s": float(ue_time_s), "effect": effect,
+                "fe_correction": correction}
     noise = {"sd_um": [1e3 * d.noise_sd_mm for d in fit_data],
              "method": "given" if noise_um is not None else
              "the loader's (third differences in time, not below q/sqrt(12))",
              "resolution_mm": [c.resolution_mm for c in prep["curves"]]}
     return _time_identification(data, {**prep, "rays": rays}, fit, intervals, flags, settings,
                                 noise)
+
+
+def _corrected(prep, rays, fit_data, fit, steps, seed, warnings) -> tuple:
+    """``(fit, data, record)``: the fit corrected by FE time solves at the fit, and the
+    data less the fast path's error there (:func:`fe_corrected_fit`); the fast fit,
+    with a warning, where an FE time solve stops."""
+    from ._time_correction import fe_corrected_fit, time_fit_skin
+
+    if _check_steps(steps) == 0:
+        return fit, fit_data, {"applied": False, "reason": "not asked (fe_correction 0)"}
+    cause = next(iter(rays.values())).cause
+
+    def skin_of(parameters):
+        return time_fit_skin(parameters, prep["geometry"], prep["space"].bottom, cause)
+
+    try:
+        return fe_corrected_fit(rays, fit_data, fit, skin_of, iterations=steps, seed=seed)
+    except RuntimeError as err:
+        warnings.append(f"FE correction: stopped ({err}); the fit is the fast path's, with "
+                        "its model error")
+        return fit, fit_data, {"applied": False, "reason": str(err)}
+
+
+def _check_steps(steps) -> int:
+    if int(steps) != steps or not 0 <= steps <= 5:
+        raise ValueError(f"fe_correction must be a whole number of steps in 0..5, got "
+                         f"{steps!r}")
+    return int(steps)
 
 
 def _flag_bounds(rays, fit_data, fit, intervals, warnings) -> dict:
@@ -374,6 +413,8 @@ def _time_identification(data, prep, fit, intervals, flags, settings,
         model.update({"name": f"two-layer, {cause.name} ({cause.symbol}), one Prony spectrum "
                               "for both layers, fast path M_el(p_eff) on the cause's rays",
                       "effect": cause.name, cause.symbol: params[cause.symbol]})
+    if (settings.get("fe_correction") or {}).get("applied"):
+        model["name"] += ", corrected by FE time solves at the fit"
     quality, fitted = _fit_quality(curves, fit_data, fit)
     spec = next(iter(rays.values())).spec
     return TimeIdentification(
