@@ -15,7 +15,7 @@ in ``benchmarks/out/time_identify_fe/`` (one CSV per draw, named by the seed, th
 range and the draw) and read from there on a rerun (``--no-cache`` solves them again):
 a change of the fit or of the intervals is measured on the same virtual experiments.
 
-    python benchmarks/time_identify.py [--draws 16] [--seed 0] [--no-cache]
+    python benchmarks/time_identify.py [--draws 16] [--seed 0] [--no-cache] [--fe-correction 2]
 """
 
 from __future__ import annotations
@@ -52,6 +52,8 @@ def main():
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--x1d-min", type=float, default=0.06)
     ap.add_argument("--x1d-max", type=float, default=0.15)
+    ap.add_argument("--fe-correction", type=int, default=2,
+                    help="steps of the FE correction of each fit (0: the fast path alone)")
     ap.add_argument("--no-cache", action="store_true",
                     help="solve the FE curves again (not read from benchmarks/out)")
     args = ap.parse_args()
@@ -85,7 +87,8 @@ def main():
             for phases in ("all", "on"):
                 t1 = time.perf_counter()
                 r = identify_time_data(data, space, terms=1, seed=i, repeats=2, phases=phases,
-                                       probes=None if probes == "both" else [6.0])
+                                       probes=None if probes == "both" else [6.0],
+                                       fe_correction=args.fe_correction)
                 fit_s = time.perf_counter() - t1
                 iv = r["intervals"]
                 row = {"draw": i, "probes": probes, "phases": phases, "fe_s": fe_s,
