@@ -396,11 +396,10 @@ def layer_test(fitter: EffectFitter, final: TimeModel, settings) -> dict:
     -------
     dict
         ``tested`` (bool), ``reason``; when tested: ``delta_bic`` (per layer minus
-        shared), ``decisive`` (the layers' spectra differ), ``creeping``
-        (:func:`_creeping`), the
+        shared), ``decisive`` (the spectra differ), ``creeping`` (:func:`_creeping`),
         ``elastic_check`` (does the final model's elastic effect still earn its place
-        with a spectrum per layer?), the per-layer ``parameters`` and
-        ``intervals``, ``beta`` per probe, ``model_error``.
+        with a spectrum per layer?), the per-layer ``parameters`` and ``intervals``,
+        ``beta`` per probe, ``model_error``, ``fe_correction`` (per fit).
     """
     from skinsuction.identify import (MODEL_ERROR_LAYERS, TimeCurveModel, fit_data_of,
                                       fit_time_model, laplace_intervals)
