@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from skinsuction.evaluation import mode1_suction, virtual_skin_curve, write_time_csv
-from skinsuction.identify import CORRECTION_MESH, fe_corrected_fit, fit_time_model
+from skinsuction.identify import fe_corrected_fit, fit_time_model
 from skinsuction.identify.time_curves import prepare_time_fit
 from skinsuction.measured import load_time_curves
 from skinsuction.model import Skin
@@ -33,8 +33,7 @@ def fe_curves(tmp_path_factory):
     curves = []
     for probe in (2.0, 8.0):
         t, p, _, exact, _ = virtual_skin_curve(_skin(TRUTH), suction, probe_mm=probe,
-                                               rate_hz=25.0, noise_mm=0.0, resolution_mm=0.0,
-                                               mesh=CORRECTION_MESH)
+                                               rate_hz=25.0, noise_mm=0.0, resolution_mm=0.0)
         curves.append((probe, t, p, exact))
     path = write_time_csv(tmp_path_factory.mktemp("fe") / "fe.csv", curves,
                           ["FE, correction mesh"])

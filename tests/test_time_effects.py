@@ -288,3 +288,18 @@ def test_a_study_names_both_effects_of_a_mode1_file(creep_and_stiffening, tmp_pa
     assert row["effects"] == f"{VISCOELASTIC_CREEP},{STIFF}", row["warnings"]
     assert row["cause"] == VISCOELASTIC_CREEP and row["extra_parameter"] == "X2d"
     assert row["extra_lower"] <= 0.5 <= row["extra_upper"]
+
+
+def test_a_stopped_fe_correction_keeps_the_fast_fit_and_says_so(space, tmp_path, monkeypatch):
+    import skinsuction.identify._time_correction as tc
+
+    def stops(skin, data, mesh=None):
+        raise RuntimeError(f"{data.label}: the FE time solve stopped: no equilibrium")
+
+    monkeypatch.setattr(tc, "fe_time_curve", stops)
+    skin = Skin.two_layer(0.1, 0.005, spectrum=Prony([0.4], [0.3]))
+    r = diagnose_time_data(_skin_file(tmp_path / "c.csv", skin, probes=(6.0,)), space, FAST)
+    assert r["effects"] == [VISCOELASTIC_CREEP], r["summary"]
+    assert r["viscoelastic"]["fe_correction"]["applied"] is False
+    assert any(w.startswith("FE correction: viscoelastic_creep") and "stopped" in w
+               for w in r["warnings"]), r["warnings"]

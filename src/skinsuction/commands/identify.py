@@ -95,8 +95,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "effects itself)")
     p.add_argument("--fe-correction", type=int, choices=range(6), default=2, metavar="STEPS",
                    help="time curves: steps of the FE correction of the fit (FE time solves "
-                        "at the fit remove the fast path's error; about 2-5 s of CPU a step "
-                        "and curve; 0: the fast path alone; default 2)")
+                        "at the fit remove the fast path's error; one FE time solve a step "
+                        "and curve, 1-15 s of CPU with the curve's length; 0: the fast path "
+                        "alone; default 2)")
     p.add_argument("--phases", choices=("all", "on"), default="all",
                    help="time curves: fit every point, with the fast path's model error per "
                         "phase in the likelihood (all, default), or only while the suction "

@@ -280,8 +280,7 @@ def _judge(run: _Run, fd, settings, warnings) -> dict:
                         f"{min(o['delta_bic'] for o in run.sel['steps'][0]['options']):+.1f} > "
                         f"{settings.delta_bic:g}): unexplained misfit")
     warnings += [f"pattern: {p}" for p in patterns]
-    warnings += [f"FE correction: {n}" for n in run.fitter.notes
-                 if "the FE correction stopped" in n]
+    warnings += [f"FE correction: {n}" for n in run.fitter.correction_failures]
     return {"el": el, "ve": ve, "fin": fin, "effects": effects, "misfit": misfit,
             "verdict": verdict, "at_bound": at_bound, "beyond": beyond,
             "patterns": patterns, "warnings": warnings}

@@ -137,6 +137,8 @@ class EffectFitter:
         self._seeds = dict(zip([(), (VISCOELASTIC_CREEP,)], root.spawn(2)))
         self._seed = int(settings.seed)
         self.notes, self.rays = [], {None: prep["rays"]}
+        #: the fits whose FE correction stopped (the fast fit kept): warnings
+        self.correction_failures = []
         for name in causes:
             rays, notes = prep["space"].cause_rays(name, self.probes)
             self.notes += [n for n in notes if n not in self.notes]
@@ -206,7 +208,7 @@ class EffectFitter:
             note = (f"{model_name(key)}{' (a spectrum per layer)' if layers else ''}: the FE "
                     f"correction stopped ({err}); the fit is the fast path's, with its model "
                     "error")
-            self.notes.append(note)
+            self.correction_failures.append(note)
             return fit, data, {"applied": False, "reason": note}
 
     def _start(self, key, nested: TimeModel):

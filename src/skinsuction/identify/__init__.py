@@ -72,7 +72,7 @@ from ._surrogate import (
     surrogate_deflection,
     write_surrogate_space,
 )
-from ._time_correction import CORRECTION_MESH, fe_corrected_fit, fe_time_curve, time_fit_skin
+from ._time_correction import fe_corrected_fit, fe_time_curve, time_fit_skin
 from ._time_fit import (MODEL_ERROR_LAYERS, TimeCurveModel, TimeFit, TimeFitData, fit_data_of,
                         fit_time_model)
 from ._time_intervals import laplace_intervals, time_bound_flags
@@ -109,7 +109,6 @@ __all__ = [
     "fe_corrected_fit",
     "fe_time_curve",
     "time_fit_skin",
-    "CORRECTION_MESH",
     "TimeCurveModel",
     "MODEL_ERROR_LAYERS",
     "fit_data_of",

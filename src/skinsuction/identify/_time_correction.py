@@ -25,11 +25,8 @@ import time
 
 import numpy as np
 
-__all__ = ["CORRECTION_MESH", "time_fit_skin", "fe_time_curve", "fe_corrected_fit"]
+__all__ = ["time_fit_skin", "fe_time_curve", "fe_corrected_fit"]
 
-#: The mesh of the correction's FE time solves when none is given and the rays hold
-#: none: the reference mesh (the space's own, ``scale_free_space.mesh`` empty).
-CORRECTION_MESH = {}
 #: Steps after each switch of the suction (s): 1 ms doubling, as the virtual experiments.
 GRADED_STEPS_S = 1e-3 * 2.0 ** np.arange(6)
 
@@ -89,7 +86,7 @@ def fe_time_curve(skin, data, mesh=None) -> np.ndarray:
     data : TimeFitData
         The curve (its cleaned suction, times, probe and breaks).
     mesh : dict, optional
-        Mesh settings (default :data:`CORRECTION_MESH`).
+        Mesh settings (default: the model's reference mesh).
 
     Returns
     -------
@@ -109,7 +106,7 @@ def fe_time_curve(skin, data, mesh=None) -> np.ndarray:
     fine = (switches[:, None] + GRADED_STEPS_S[None, :]).ravel()
     tf = np.unique(np.round(np.concatenate([t, fine[fine < t[-1]]]), 9))
     h = simulate_history(skin, tf, np.interp(tf, t, p), probe=data.probe_mm,
-                         mesh=CORRECTION_MESH if mesh is None else mesh)
+                         mesh=mesh)
     if not h.converged:
         raise RuntimeError(f"{data.label}: the FE time solve stopped: {h.reason}")
     return np.interp(t, tf, np.asarray(h.deflection_mm, dtype=float))
