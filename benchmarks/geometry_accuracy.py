@@ -2,6 +2,7 @@
 
     python benchmarks/geometry_accuracy.py [--space-dir DIR] [--geometries 30]
         [--per-geometry 4] [--seed 0] [--workers 2] [--cache DIR]
+        [--geometry-space FILE | --no-geometry-space] [--side-by-side]
 
 Draws random geometries (the aperture uniform in 2-8 mm, t_d uniform in 0.5-2.5
 mm, t_h log-uniform in 0.5-10 mm), solves their neo-Hookean rays on demand (as
@@ -11,6 +12,11 @@ points of each (X1h/X1d log-uniform over the ratio nodes, X1d log-uniform in
 compares the interpolated space with a direct FE run at every pressure, as
 benchmarks/scale_free_accuracy.py does for the precomputed probes. Prints the
 percentiles of the relative error overall and per aperture band. Asserts nothing.
+
+The rays of a geometry are read off the geometry space (the default,
+skinsuction.space.GeometrySpace) where it holds them; --no-geometry-space solves
+them all. --side-by-side does both in one run, against the same direct FE runs,
+and prints both tables with the CPU a geometry's rays cost each way.
 """
 
 from __future__ import annotations
@@ -28,11 +34,14 @@ import pandas as pd
 _CTX = {}
 
 
-def _init(space_dir, cache):
+def _init(space_dir, cache, geometry, side_by_side):
     from skinsuction.space import BASELINE, OnDemandRays, read_ray_spaces
 
     base = read_ray_spaces(space_dir)[BASELINE]
-    _CTX.update(base=base, solver=OnDemandRays(base.spec, cache_dir=cache))
+    _CTX.update(base=base, solver=OnDemandRays(base.spec, cache_dir=cache, geometry=geometry,
+                                               progress=None))
+    if side_by_side:
+        _CTX["solved"] = OnDemandRays(base.spec, cache_dir=cache, geometry=None, progress=None)
 
 
 def _run(job):
@@ -44,13 +53,33 @@ def _run(job):
     g = Geometry(t_d, t_h, given=("t_d", "t_h"))
     spaces, notes = spaces_at({BASELINE: _CTX["base"]}, [probe], g, _CTX["solver"])
     rays_cpu = time.process_time() - t0
+    source = "geometry space" if _CTX["solver"].interpolated else "solved"
+    solved = None
+    if "solved" in _CTX:
+        t0 = time.process_time()
+        solved = spaces_at({BASELINE: _CTX["base"]}, [probe], g, _CTX["solved"])[0][BASELINE]
+        solved_cpu = time.process_time() - t0
     out = []
     for (x1d, ratio, p_max, p_step) in points:
         pt = AccuracyPoint(BASELINE, probe, x1d, ratio, math.nan, p_max, p_step, t_d, t_h)
         rec = compare_point(spaces[BASELINE], pt)
         rec["rays_cpu_s"] = rays_cpu
+        rec["rays_source"] = source
+        if solved is not None:
+            rec["solved_mm"] = _read_at(solved, pt, rec["pressure_mbar"])
+            rec["solved_rays_cpu_s"] = solved_cpu
         out.append(rec)
     return out
+
+
+def _read_at(space, pt, pressures):
+    """The space's curve of the point at the pressures compared."""
+    from skinsuction.evaluation._accuracy import interpolant
+
+    if not pressures:
+        return []
+    f = interpolant(space, pt.probe_mm, np.asarray(pressures, float))
+    return f([[math.log10(pt.x1d), math.log10(pt.ratio)]])[0].tolist()
 
 
 def main(argv=None):
@@ -62,7 +91,14 @@ def main(argv=None):
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--cache", default="benchmarks/out/on_demand")
     ap.add_argument("--out", default="benchmarks/out/geometry_accuracy.csv")
+    ap.add_argument("--geometry-space", default="auto",
+                    help="geometry space file (default: the workflow's build, else the shipped)")
+    ap.add_argument("--no-geometry-space", action="store_true",
+                    help="solve every geometry's rays (today's rays on demand)")
+    ap.add_argument("--side-by-side", action="store_true",
+                    help="also solve the rays and compare both with the same FE runs")
     args = ap.parse_args(argv)
+    geometry = None if args.no_geometry_space else args.geometry_space
 
     from skinsuction.evaluation import PROTOCOLS
     from skinsuction.space import BASELINE, read_ray_spaces
@@ -83,16 +119,21 @@ def main(argv=None):
         jobs.append((geo, pts))
     t0 = time.perf_counter()
     with ProcessPoolExecutor(args.workers, initializer=_init,
-                             initargs=(args.space_dir, args.cache)) as pool:
+                             initargs=(args.space_dir, args.cache, geometry,
+                                       args.side_by_side)) as pool:
         records = [r for rs in pool.map(_run, jobs) for r in rs]
     wall = time.perf_counter() - t0
     rows = []
     for r in records:
-        for p, fe, sp in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"]):
-            rows.append({k: r[k] for k in ("probe_mm", "t_d", "t_h", "x1d", "ratio", "p_max")}
-                        | {"pressure_mbar": p, "fe_mm": fe, "space_mm": sp})
+        solved = r.get("solved_mm") or [math.nan] * len(r["fe_mm"])
+        for p, fe, sp, so in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"], solved):
+            rows.append({k: r[k] for k in ("probe_mm", "t_d", "t_h", "x1d", "ratio", "p_max",
+                                           "rays_source")}
+                        | {"pressure_mbar": p, "fe_mm": fe, "space_mm": sp, "solved_mm": so})
     per_p = pd.DataFrame(rows)
     per_p["relative_error"] = (per_p["space_mm"] - per_p["fe_mm"]).abs() / per_p["fe_mm"].abs()
+    per_p["solved_relative_error"] = ((per_p["solved_mm"] - per_p["fe_mm"]).abs()
+                                      / per_p["fe_mm"].abs())
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     per_p.to_csv(out, index=False)
@@ -101,8 +142,12 @@ def main(argv=None):
     pts.to_csv(out.with_name(out.stem + "_points.csv"), index=False)
     print(f"{args.geometries} geometries x {args.per_geometry} points ({args.seed=}), "
           f"{len(per_p)} pressures compared; {wall:.0f} s wall on {args.workers} workers; "
-          f"rays on demand {pts.groupby(['probe_mm', 't_d', 't_h'])['rays_cpu_s'].first().median():.1f}"
-          " CPU-s per geometry (median)")
+          f"rays {pts.groupby(['probe_mm', 't_d', 't_h'])['rays_cpu_s'].first().median():.2f}"
+          " CPU-s per geometry (median); sources: "
+          f"{pts.groupby(['probe_mm', 't_d', 't_h'])['rays_source'].first().value_counts().to_dict()}")
+    if args.side_by_side:
+        print(f"rays solved on demand: {pts.groupby(['probe_mm', 't_d', 't_h'])['solved_rays_cpu_s'].first().median():.1f}"
+              " CPU-s per geometry (median)")
     print(f"pressures beyond the space's coverage where FE has a value: "
           f"{int(pts['n_fe_only'].sum())}")
 
@@ -111,11 +156,16 @@ def main(argv=None):
         return (f"median {100 * np.median(v):.3f} %, 95th percentile "
                 f"{100 * np.percentile(v, 95):.3f} %, max {100 * v.max():.3f} %")
 
-    print(f"[all] {len(per_p)} pressures: {stats(per_p['relative_error'])}")
+    columns = [("relative_error", "rays read")]
+    if args.side_by_side:
+        columns.append(("solved_relative_error", "rays solved"))
     bands = pd.cut(per_p["probe_mm"], [2, 3, 5, 7, 8.0001], right=False,
                    labels=["2-3 mm", "3-5 mm", "5-7 mm", "7-8 mm"])
-    for band, g in per_p.groupby(bands, observed=True):
-        print(f"[{band}] {len(g)} pressures: {stats(g['relative_error'])}")
+    for col, label in columns:
+        sel = per_p[per_p[col].notna()]
+        print(f"{label}: [all] {len(sel)} pressures: {stats(sel[col])}")
+        for band, g in sel.groupby(bands, observed=True):
+            print(f"{label}: [{band}] {len(g)} pressures: {stats(g[col])}")
     print(f"written: {out}")
     return 0
 

@@ -16,6 +16,12 @@ config.scale_free_space.pairs -> the rays of two causes at once, both away from
   scale_free_pairs; not in the default target: about 3 100 FE rays, some 45 CPU-min,
   so the study reads the pairs shipped with the package unless they are built)
 
+config.scale_free_space.geometry -> the neo-Hookean rays over the subject's
+  geometry (t_d/a x t_h/a x X1h/X1d), one job per t_d/a node
+  -> results/simulated_space/scale_free/geometry/neo_hookean.parquet (target
+  scale_free_geometry; not in the default target: 3 328 FE rays, some 45 CPU-min,
+  so identify, diagnose and study read the one shipped with the package unless built)
+
 Developer rule, not in any target: `snakemake --cores 2 ship_scale_free_space`
 copies the built model files into src/skinsuction/data/scale_free/ with
 PROVENANCE.json (what identify, diagnose and study read when no build is in the
@@ -39,6 +45,8 @@ from skinsuction.space import (  # noqa: E402
     pairs_from_config,
     ray_bundles,
     registry_from_config,
+    GEOMETRY_FOLDER,
+    GeometryGrid,
 )
 
 SF = config["scale_free_space"]
@@ -54,6 +62,16 @@ SF_BUNDLES = {**ray_bundles(SF_SPEC, SF_CAUSES, SF.get("rays_per_job", 1)), **SF
 SF_DIR = "results/simulated_space/scale_free"
 SF_SPACES = expand(f"{SF_DIR}/{{model}}.parquet", model=SF_MODELS)
 
+SF_GEOMETRY = None
+if SF.get("geometry"):
+    try:
+        SF_GEOMETRY = GeometryGrid.from_config(SF["geometry"])
+    except ValueError as err:
+        raise _config_error("scale_free_space.geometry", err)
+SF_GEOMETRY_DIR = f"{SF_DIR}/{GEOMETRY_FOLDER}"
+SF_GEOMETRY_BUNDLES = {f"td{td:g}": td for td in (SF_GEOMETRY.td_nodes if SF_GEOMETRY else ())}
+SF_GEOMETRY_SPACE = [f"{SF_GEOMETRY_DIR}/neo_hookean.parquet"] if SF_GEOMETRY else []
+
 
 # bundle files that hold the rays of each model: its own and the neutral (neo-Hookean) ones
 SF_MODEL_BUNDLES = {
@@ -68,6 +86,7 @@ SF_MODEL_BUNDLES = {
 
 wildcard_constraints:
     bundle=BUNDLE_ID_PATTERN,
+    gbundle="|".join(map(re.escape, SF_GEOMETRY_BUNDLES)) or "no_geometry",
     model="|".join(map(re.escape, SF_MODELS)),
     pair="|".join(map(re.escape, SF_PAIRS)) or "no_pair",
 
@@ -89,6 +108,8 @@ SF_PAIR_SPACES = expand(f"{SF_DIR}/{PAIRS_FOLDER}/{{pair}}.parquet", pair=SF_PAI
 localrules:
     scale_free_space,
     scale_free_pairs,
+    scale_free_geometry,
+    ship_geometry_space,
     ship_scale_free_space,
     ship_pair_spaces,
 
@@ -103,6 +124,79 @@ rule scale_free_pairs:
     """Target: the spaces of the pairs of causes (scale_free_space.pairs)."""
     input:
         SF_PAIR_SPACES,
+
+
+rule scale_free_geometry:
+    """Target: the neo-Hookean space over the subject's geometry (scale_free_space.geometry)."""
+    input:
+        SF_GEOMETRY_SPACE,
+
+
+rule simulate_geometry_bundle:
+    """The FE rays of one t_d/a node of the geometry space (every t_h/a and X1h/X1d)."""
+    output:
+        bundle=f"{SF_GEOMETRY_DIR}/rays/{{gbundle}}.parquet",
+    log:
+        "logs/scale_free/geometry/{gbundle}.log",
+    benchmark:
+        "results/benchmarks/scale_free/geometry/{gbundle}.tsv"
+    params:
+        bundle=lambda w: f"geometry__{w.gbundle}",
+        rays=lambda w: SF_GEOMETRY.ray_ids(SF_SPEC, SF_GEOMETRY_BUNDLES[w.gbundle]),
+        pressures=list(SF_SPEC.pressures_mbar),
+        mesh=SF_SPEC.mesh,
+        fallback=[dict(f) for f in SF_SPEC.fallback],
+        code=code_hash(*FE_RAY_CODE),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=60,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/simulate_ray_bundle.py"
+
+
+rule assemble_geometry_space:
+    input:
+        bundles=expand(f"{SF_GEOMETRY_DIR}/rays/{{gbundle}}.parquet", gbundle=SF_GEOMETRY_BUNDLES),
+    output:
+        space=f"{SF_GEOMETRY_DIR}/neo_hookean.parquet",
+    log:
+        "logs/scale_free/geometry/assemble.log",
+    params:
+        spec=SF_SPEC.to_dict(),
+        grid=SF_GEOMETRY.to_dict() if SF_GEOMETRY else {},
+        code=code_hash(*SPACE_CODE),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/assemble_geometry_space.py"
+
+
+rule ship_geometry_space:
+    """Developer rule (no target asks for it): ship the built geometry space with the package.
+
+    Copies results/simulated_space/scale_free/geometry/neo_hookean.parquet into
+    src/skinsuction/data/scale_free/geometry/ with its own PROVENANCE.json.
+    """
+    input:
+        space=SF_GEOMETRY_SPACE,
+    log:
+        "logs/scale_free/ship_geometry_space.log",
+    params:
+        dest=str(SF_SHIPPED),
+        repo=str(Path(workflow.basedir)),
+        build_command="snakemake --cores 2 scale_free_geometry",
+    threads: 1
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/ship_geometry_space.py"
 
 
 rule assemble_pair_space:

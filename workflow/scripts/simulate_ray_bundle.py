@@ -1,4 +1,4 @@
-"""Rule simulate_ray_bundle: the FE rays of one (model, probe, X1h/X1d) of the scale-free space."""
+"""Rules simulate_ray_bundle and simulate_geometry_bundle: a bundle of FE rays of the scale-free space."""
 
 from skinsuction.jobs import job
 
@@ -11,6 +11,7 @@ with job(snakemake.log[0], threads=snakemake.threads):
         pressures_mbar=snakemake.params.pressures,
         mesh=dict(snakemake.params.mesh),
         fallback=[dict(f) for f in snakemake.params.fallback],
-        metadata={"bundle_id": snakemake.wildcards.bundle,
+        metadata={"bundle_id": getattr(snakemake.params, "bundle", None)
+                  or snakemake.wildcards.bundle,
                   "source_hash": {"model": snakemake.params.code}},
     )

@@ -34,6 +34,8 @@ Modules:
   their nodes;
 * ``_on_demand``: rays at a measurement's own probe and layers, solved on
   demand and cached (:class:`OnDemandRays`);
+* ``_geometry_space``: the neo-Hookean rays over the subject's geometry, read
+  by interpolation (:class:`GeometrySpace`); rays on demand read it first;
 * ``_geometry``: the spaces of one measurement (:func:`spaces_at`);
 * ``_open``: either layout, per probe (:func:`load_space`);
 * ``_shipped``: the default space (the workflow's build in the working
@@ -100,6 +102,16 @@ from ._pairs import (
     read_pair_space,
     read_pair_spaces,
     space_causes,
+)
+from ._geometry_space import (
+    GEOMETRY_FOLDER,
+    GeometryGrid,
+    GeometrySpace,
+    assemble_geometry_space,
+    default_geometry_file,
+    read_geometry_space,
+    same_rays,
+    ship_geometry_space,
 )
 from ._ray_solve import build_ray_spaces, compute_bundle, compute_ray
 from ._ray_space import (
@@ -197,6 +209,8 @@ __all__ = [
     # every probe and the subject's layers
     "DEFAULT_LAYERS_MM", "Geometry", "GeometryOutsideSpace", "OnDemandRays",
     "default_cache_dir", "spaces_at", "ThicknessNuisance", "window_nodes",
+    "GEOMETRY_FOLDER", "GeometryGrid", "GeometrySpace", "assemble_geometry_space",
+    "default_geometry_file", "read_geometry_space", "same_rays", "ship_geometry_space",
     "THICKNESS_RESOLUTION_MM", "LAYER_PATHS", "layer_thicknesses",
     "SpaceCoordinates", "load", "reference_pressure", "similar_length",
 ]

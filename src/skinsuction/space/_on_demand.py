@@ -132,9 +132,16 @@ class OnDemandRays:
     progress : text stream or None
         Where each solve is announced, with its time (default stderr): a
         geometry's rays of every cause take minutes, and the user must see why.
+    geometry : "auto", GeometrySpace, path-like or None
+        Where the neo-Hookean rays (and a thickness cause's) are read first, by
+        interpolation over the geometry (:class:`GeometrySpace`), before any is
+        solved.  "auto" (default): the workflow's build in the working directory,
+        else the one shipped with the package, if it was solved with the same rays
+        as ``spec`` (:func:`same_rays`).  None: every ray is solved.
     """
 
-    def __init__(self, spec, cache_dir=None, workers: int = 1, progress="stderr"):
+    def __init__(self, spec, cache_dir=None, workers: int = 1, progress="stderr",
+                 geometry="auto"):
         import json
         import sys
 
@@ -145,6 +152,8 @@ class OnDemandRays:
                              + _fe_code_hash().encode()).hexdigest()[:16]
         self.dir = Path(cache_dir or default_cache_dir()) / "rays" / key
         self.solved = 0  # geometries solved by this object (not read from the cache)
+        self.geometry = _geometry_space(geometry, spec)
+        self.interpolated = 0  # ray sets read off the geometry space
 
     def _ray_ids(self, probe_mm, layers, cause=None, coordinate=None, ratio_nodes=None):
         """The ids of the rays at ``layers`` (by path), one per X1h/X1d node."""
@@ -204,9 +213,27 @@ class OnDemandRays:
                 "stopped_early": sum(i["stopped_early"] for i in infos)}
         return np.stack(columns, axis=1), info
 
+    def _from_geometry(self, ref, a, cause, c, nodes):
+        """The rays at ``ref`` (scaled by ``a``) read off the geometry space, or None
+        where it does not hold them (a cause other than a thickness, outside its grid)."""
+        if self.geometry is None or (cause is not None and not cause.geometric):
+            return None
+        layers = _keywords(ref)
+        if cause is not None:
+            layers[cause.keyword] = round_sig(similar_length(c, 2 * a), 6)
+        if not self.geometry.grid.covers(layers["t_d"], layers["t_h"]):
+            return None
+        m, info = self.geometry.rays(2.0, layers["t_d"], layers["t_h"], nodes)
+        self.interpolated += 1
+        return m * a, {**info, "cache": "geometry space"}
+
     def _read(self, ref, a, cause, c, nodes):
         """The rays at the reference layers ``ref`` (2 mm aperture) scaled by ``a``: read
-        from the cache file, the missing ones solved into it first."""
+        off the geometry space, else from the cache file, the missing ones solved into
+        it first."""
+        found = self._from_geometry(ref, a, cause, c, nodes)
+        if found is not None:
+            return found
         stem = "td{t_d:g}_th{t_h:g}".format(**_keywords(ref))
         if cause is None:
             path = self.dir / f"{stem}.parquet"
@@ -265,6 +292,30 @@ class OnDemandRays:
             print(f"solved on demand: {len(ids)} FE rays for t_d/a = {td:g}, t_h/a = {th:g} "
                   f"({path.stem}) in {time.perf_counter() - start:.0f} s; cached in {path.parent}",
                   file=self.progress, flush=True)
+
+
+def _geometry_space(geometry, spec):
+    """The geometry space an :class:`OnDemandRays` reads first (see its ``geometry``)."""
+    from ._geometry_space import GeometrySpace, read_geometry_space, same_rays
+
+    if geometry is None:
+        return None
+    if isinstance(geometry, GeometrySpace):
+        space = geometry
+    elif isinstance(geometry, str) and geometry == "auto":
+        from ._geometry_space import default_geometry_file
+
+        path = default_geometry_file()
+        if path is None:
+            return None
+        space = read_geometry_space(path)
+        return space if same_rays(space.spec, spec) else None
+    else:
+        space = read_geometry_space(geometry)
+    if not same_rays(space.spec, spec):
+        raise ValueError("the geometry space was solved with other rays than the "
+                         "specification it is asked to extend")
+    return space
 
 
 def _merge_bundles(parts, path):

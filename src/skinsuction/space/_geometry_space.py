@@ -1,0 +1,376 @@
+"""The neo-Hookean space over the subject's geometry: rays at any layers by interpolation.
+
+A measurement with its own layers (ultrasound, OCT) needs the neo-Hookean rays
+of its probe at its own ``t_d / a`` and ``t_h / a``.  Solving them costs 16 FE
+rays a probe (10-40 s of CPU); this space holds them on a grid of the
+dimensionless geometry instead, solved once at ``a = 1 mm`` (geometric
+similarity, M(s a, s t_d, s t_h) = s M), and a new subject's rays are
+interpolated from it: a lookup.
+
+On each ray of the specification (an X1h/X1d node, a load node) the log of the
+deflection is interpolated by local cubic Lagrange polynomials in
+``log(t_d / a)`` and ``log(t_h / a)`` (:class:`LagrangeAxis`, a 4 x 4 stencil).
+The nodes of ``t_d / a`` are denser below 0.65, where the dermis turns from a
+membrane into a plate under a soft hypodermis (docs/geometry.md).  A ray that
+stopped before the last load at a stencil node makes the interpolated ray stop
+there too: the space never reports a load it has not simulated around.
+
+The FE model stays the reference: a geometry outside the grid, or a ray
+specification the grid was not built with, is solved on demand
+(:class:`skinsuction.space.OnDemandRays`), which also reads this space first.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ._lagrange import LagrangeAxis
+from ._rays import RaySpec, _ray_params, ray_id
+from ._storage import _read_parquet, _write_parquet, round_sig
+
+__all__ = ["GeometryGrid", "GeometrySpace", "assemble_geometry_space",
+           "read_geometry_space", "GEOMETRY_FOLDER", "same_rays",
+           "default_geometry_file", "ship_geometry_space"]
+
+#: The folder of a scale-free space that holds its geometry space.
+GEOMETRY_FOLDER = "geometry"
+
+#: The file of the neo-Hookean geometry space in that folder.
+GEOMETRY_FILE = "neo_hookean.parquet"
+
+#: Digits of a geometry node (its ray id and cache name).
+_NODE_DIGITS = 4
+
+
+def _nodes(values, name: str) -> tuple:
+    out = tuple(round_sig(float(v), _NODE_DIGITS) for v in values)
+    if len(out) < 4 or not all(b > a > 0 for a, b in zip(out, out[1:])):
+        raise ValueError(f"{name}: at least 4 positive, strictly increasing nodes, not {values!r}")
+    return out
+
+
+@dataclass(frozen=True)
+class GeometryGrid:
+    """The nodes of the dimensionless geometry: ``t_d / a`` and ``t_h / a``.
+
+    Parameters
+    ----------
+    td_nodes, th_nodes : sequence of float
+        Strictly increasing, at least 4 each (cubic interpolation), rounded to 4
+        significant digits.
+
+    Examples
+    --------
+    >>> g = GeometryGrid([0.2, 0.4, 0.8, 1.6], [0.5, 1, 2, 4])
+    >>> g.covers(0.3, 3.0), g.covers(0.1, 3.0)
+    (True, False)
+    >>> len(g.points)
+    16
+    """
+
+    td_nodes: tuple
+    th_nodes: tuple
+
+    def __post_init__(self):
+        object.__setattr__(self, "td_nodes", _nodes(self.td_nodes, "t_d_over_a"))
+        object.__setattr__(self, "th_nodes", _nodes(self.th_nodes, "t_h_over_a"))
+
+    @classmethod
+    def from_config(cls, section: dict) -> "GeometryGrid":
+        """From ``scale_free_space.geometry``: ``{t_d_over_a: [...], t_h_over_a: [...]}``."""
+        missing = [k for k in ("t_d_over_a", "t_h_over_a") if k not in section]
+        if missing:
+            raise ValueError(f"scale_free_space.geometry needs {missing}")
+        return cls(section["t_d_over_a"], section["t_h_over_a"])
+
+    def to_dict(self) -> dict:
+        return {"t_d_over_a": list(self.td_nodes), "t_h_over_a": list(self.th_nodes)}
+
+    @property
+    def points(self) -> list:
+        """Every node ``(t_d / a, t_h / a)``, by ``t_d`` then ``t_h``."""
+        return [(d, h) for d in self.td_nodes for h in self.th_nodes]
+
+    def covers(self, td_a: float, th_a: float) -> bool:
+        """Whether the geometry lies inside the grid (edges included)."""
+        return (self.td_nodes[0] <= td_a <= self.td_nodes[-1]
+                and self.th_nodes[0] <= th_a <= self.th_nodes[-1])
+
+    def ray_ids(self, spec: RaySpec, td_a: float | None = None) -> list:
+        """The FE rays of the grid (at ``a = 1 mm``), or of one ``t_d / a`` node.
+
+        They are the ray ids :class:`OnDemandRays` solves at those layers, so the
+        grid's rays and the rays on demand are the same FE runs.
+        """
+        tds = self.td_nodes if td_a is None else (round_sig(td_a, _NODE_DIGITS),)
+        return [ray_id(_ray_params(spec, 2.0, r, None, None, {"t_d": d, "t_h": h}, digits=6))
+                for d in tds for h in self.th_nodes for r in spec.ratio_nodes]
+
+
+class GeometrySpace:
+    """Neo-Hookean rays over the dimensionless geometry, read by interpolation.
+
+    Parameters
+    ----------
+    spec : RaySpec
+        The ray specification the grid was solved with (ratio nodes, loads,
+        mesh): rays are served only to an :class:`OnDemandRays` of the same one.
+    grid : GeometryGrid
+    deflection : ndarray, shape (n_td, n_th, n_r, n_p)
+        M / a at each node, X1h/X1d node and pressure of ``spec`` (NaN beyond
+        where a ray stopped).
+    provenance : dict, optional
+    """
+
+    def __init__(self, spec: RaySpec, grid: GeometryGrid, deflection, provenance=None):
+        m = np.asarray(deflection, dtype=float)
+        shape = (len(grid.td_nodes), len(grid.th_nodes), len(spec.ratio_nodes),
+                 len(spec.pressures_mbar))
+        if m.shape != shape:
+            raise ValueError(f"deflections of shape {m.shape}, the grid needs {shape}")
+        self.spec, self.grid, self.provenance = spec, grid, dict(provenance or {})
+        self.deflection = m
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self._log = np.log(np.where(m > 0, m, np.nan))
+        self._zero = np.all(m == 0, axis=(0, 1, 2))  # the load 0
+        self._td = LagrangeAxis(np.log(grid.td_nodes))
+        self._th = LagrangeAxis(np.log(grid.th_nodes))
+
+    def covers(self, probe_mm: float, t_d: float, t_h: float) -> bool:
+        """Whether the probe and layers (mm) lie inside the grid."""
+        a = probe_mm / 2
+        return self.grid.covers(t_d / a, t_h / a)
+
+    def rays(self, probe_mm: float, t_d: float, t_h: float, ratio_nodes=None):
+        """The neo-Hookean rays of one probe at the layers ``t_d``, ``t_h`` (mm).
+
+        Parameters
+        ----------
+        probe_mm : float
+            Aperture diameter ``2 a`` (mm).
+        t_d, t_h : float
+            Dermis and hypodermis thickness (mm).
+        ratio_nodes : sequence of float, optional
+            Only these X1h/X1d nodes of the specification (default all).
+
+        Returns
+        -------
+        rays : ndarray, shape (n_r, 1, n_p)
+            Deflections (mm) at the specification's pressures.
+        info : dict
+            ``source`` ("geometry space"), ``rays``, ``stopped_early``.
+
+        Raises
+        ------
+        ValueError
+            Outside the grid, or for ratio nodes the specification does not have.
+        """
+        a = probe_mm / 2
+        td_a, th_a = t_d / a, t_h / a
+        if not self.grid.covers(td_a, th_a):
+            raise ValueError(f"t_d/a = {td_a:g}, t_h/a = {th_a:g} is outside the geometry "
+                             f"space (t_d/a {self.grid.td_nodes[0]:g}-{self.grid.td_nodes[-1]:g},"
+                             f" t_h/a {self.grid.th_nodes[0]:g}-{self.grid.th_nodes[-1]:g})")
+        index = _ratio_index(self.spec, ratio_nodes)
+        i, wi = self._td.weights([math.log(td_a)])
+        j, wj = self._th.weights([math.log(th_a)])
+        i, j, wi, wj = int(i[0]), int(j[0]), wi[0], wj[0]
+        block = self._log[i:i + wi.size, j:j + wj.size][:, :, index]  # (4, 4, n_r, n_p)
+        log_m = np.einsum("a,b,abrp->rp", wi, wj, block)
+        m = np.exp(log_m) * a
+        m[:, self._zero] = 0.0
+        # a ray is cut at its first NaN: beyond, the stencil lacks a node
+        bad = np.isnan(m)
+        cut = np.cumsum(bad, axis=1) > 0
+        m[cut] = np.nan
+        info = {"source": "geometry space", "rays": len(index),
+                "stopped_early": int(cut[:, -1].sum())}
+        return m[:, None, :], info
+
+
+def _ratio_index(spec: RaySpec, ratio_nodes) -> list:
+    if ratio_nodes is None:
+        return list(range(len(spec.ratio_nodes)))
+    where = {r: k for k, r in enumerate(spec.ratio_nodes)}
+    missing = [r for r in ratio_nodes if r not in where]
+    if missing:
+        raise ValueError(f"ratio nodes {missing} are not nodes of the ray specification")
+    return [where[r] for r in ratio_nodes]
+
+
+def assemble_geometry_space(bundle_paths, out_path, spec: RaySpec, grid: GeometryGrid,
+                            provenance: dict | None = None) -> GeometrySpace:
+    """Gather the grid's FE rays from bundle files into one geometry space file.
+
+    Parameters
+    ----------
+    bundle_paths : sequence of path-like
+        Files of solved rays (:func:`skinsuction.space.compute_bundle`, or the
+        cache files of :class:`OnDemandRays`), holding every ray of
+        :meth:`GeometryGrid.ray_ids`.
+    out_path : path-like
+        Written atomically.
+    spec : RaySpec
+    grid : GeometryGrid
+    provenance : dict, optional
+
+    Returns
+    -------
+    GeometrySpace
+
+    Raises
+    ------
+    ValueError
+        Naming the rays missing or incomplete: a missing ray is never filled in.
+    """
+    frames, infos = [], {}
+    for p in bundle_paths:
+        f, meta = _read_parquet(p)
+        frames.append(f[["ray_id", "pressure_mbar", "deflection_mm"]])
+        infos.update(meta.get("rays") or {})
+    rows = pd.concat(frames, ignore_index=True).drop_duplicates(["ray_id", "pressure_mbar"])
+    by_ray = {rid: g for rid, g in rows.groupby("ray_id", sort=False)}
+    n_p = len(spec.pressures_mbar)
+    ids = grid.ray_ids(spec)
+    missing = [rid for rid in ids if rid not in by_ray or len(by_ray[rid]) != n_p]
+    if missing:
+        raise ValueError(f"{len(missing)} of the geometry space's {len(ids)} rays are missing "
+                         f"or incomplete, e.g. {missing[:3]}")
+    m = np.stack([by_ray[rid].sort_values("pressure_mbar")["deflection_mm"].to_numpy(float)
+                  for rid in ids])
+    m = m.reshape(len(grid.td_nodes), len(grid.th_nodes), len(spec.ratio_nodes), n_p)
+    keep = ("converged", "last_converged_mbar", "mesh_fallback", "seconds", "newton_iterations")
+    rays = {rid: {k: infos.get(rid, {}).get(k) for k in keep} for rid in ids}
+    d, h, r = np.meshgrid(np.arange(len(grid.td_nodes)), np.arange(len(grid.th_nodes)),
+                          np.arange(len(spec.ratio_nodes)), indexing="ij")
+    frame = pd.DataFrame({
+        "t_d_over_a": np.repeat(np.asarray(grid.td_nodes)[d.ravel()], n_p),
+        "t_h_over_a": np.repeat(np.asarray(grid.th_nodes)[h.ravel()], n_p),
+        "ratio": np.repeat(np.asarray(spec.ratio_nodes)[r.ravel()], n_p),
+        "pressure_mbar": np.tile(np.asarray(spec.pressures_mbar, float), len(ids)),
+        "deflection_mm": m.reshape(-1)})
+    meta = {"spec": spec.to_dict(), "grid": grid.to_dict(), "rays": rays,
+            "provenance": dict(provenance or {})}
+    _write_parquet(frame, out_path, meta)
+    return GeometrySpace(spec, grid, m, meta["provenance"])
+
+
+def read_geometry_space(path) -> GeometrySpace:
+    """Read a geometry space file (:func:`assemble_geometry_space`).
+
+    Raises
+    ------
+    FileNotFoundError, ValueError
+        Naming the file.
+    """
+    path = Path(path)
+    stat = path.stat()
+    return _read_cached(str(path.resolve()), stat.st_mtime_ns, stat.st_size)
+
+
+@lru_cache(maxsize=4)
+def _read_cached(path: str, mtime_ns: int, size: int) -> GeometrySpace:
+    frame, meta = _read_parquet(path)
+    try:
+        spec = RaySpec(**meta["spec"])
+        grid = GeometryGrid.from_config(meta["grid"])
+        n = (len(grid.td_nodes), len(grid.th_nodes), len(spec.ratio_nodes),
+             len(spec.pressures_mbar))
+        m = frame["deflection_mm"].to_numpy(float).reshape(n)
+    except (KeyError, ValueError, TypeError) as err:
+        raise ValueError(f"{path}: not a geometry space file ({err})") from err
+    return GeometrySpace(spec, grid, m, meta.get("provenance"))
+
+
+def default_geometry_file(cwd=None) -> Path | None:
+    """The default geometry space: the workflow's build under ``cwd``, else the shipped one.
+
+    Returns
+    -------
+    Path or None
+        None where neither exists.
+    """
+    from ._shipped import SHIPPED_SPACE_DIR, WORKFLOW_SPACE_DIR
+
+    base = Path(cwd) if cwd is not None else Path()
+    for folder in (base / WORKFLOW_SPACE_DIR, Path(SHIPPED_SPACE_DIR)):
+        path = folder / GEOMETRY_FOLDER / GEOMETRY_FILE
+        if path.is_file():
+            return path
+    return None
+
+
+def ship_geometry_space(built_file, dest=None, *, build_command: str | None = None,
+                        repo=None) -> dict:
+    """Copy a built geometry space into the package (``<dest>/geometry/``), with its
+    ``PROVENANCE.json``: the file's SHA-256 and size, the grid, the ray specification,
+    the rays stopped early and the CPU they took, and the commit shipped from.
+
+    Parameters
+    ----------
+    built_file : path-like
+        ``results/simulated_space/scale_free/geometry/neo_hookean.parquet``.
+    dest : path-like, optional
+        The shipped space's folder (default: the package's).
+    build_command : str, optional
+        The command that built it, for the record.
+    repo : path-like, optional
+        The git repository whose commit is recorded.
+
+    Returns
+    -------
+    dict
+        The provenance record written.
+    """
+    import datetime as _dt
+    import json
+    import shutil
+
+    from skinsuction import __version__
+    from skinsuction._files import atomic_output, file_sha256
+    from skinsuction.provenance import git_info, jsonable
+
+    from ._shipped import PROVENANCE_FILE, SHIPPED_SPACE_DIR
+
+    out = Path(dest or SHIPPED_SPACE_DIR) / GEOMETRY_FOLDER
+    space = read_geometry_space(built_file)
+    frame, meta = _read_parquet(built_file)
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_output(out / GEOMETRY_FILE) as tmp:
+        shutil.copyfile(built_file, tmp)
+    rays = meta.get("rays") or {}
+    git = git_info(repo)
+    record = jsonable({
+        "what": "the neo-Hookean rays of skinsuction's default space over the subject's "
+                "geometry (t_d/a, t_h/a at a = 1 mm): identify, diagnose and study read a "
+                "subject's rays off it instead of solving them",
+        "skinsuction_version": __version__,
+        "shipped_from_commit": git.get("commit"), "shipped_from_dirty": git.get("dirty"),
+        "shipped_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "build_command": build_command,
+        "built": space.provenance,
+        "ray_spec": space.spec.to_dict(), "grid": space.grid.to_dict(),
+        "rays": len(rays),
+        "stopped_early": sum(1 for r in rays.values() if not r.get("converged", True)),
+        "cpu_s": round(sum(float(r.get("seconds") or 0.0) for r in rays.values()), 1),
+        "files": {GEOMETRY_FILE: {"sha256": file_sha256(out / GEOMETRY_FILE),
+                                  "bytes": (out / GEOMETRY_FILE).stat().st_size}},
+    })
+    with atomic_output(out / PROVENANCE_FILE) as tmp:
+        tmp.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
+    return record
+
+
+def same_rays(a: RaySpec, b: RaySpec) -> bool:
+    """Whether two specifications run the same FE rays (the probes and the fits'
+    X1d window aside): only then does a geometry space serve the other's rays."""
+    def key(s):
+        d = s.to_dict()
+        return {k: v for k, v in d.items() if k not in ("probes_mm", "x1d_range")}
+    return key(a) == key(b)
