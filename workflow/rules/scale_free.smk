@@ -19,7 +19,7 @@ config.scale_free_space.pairs -> the rays of two causes at once, both away from
 config.scale_free_space.geometry -> the neo-Hookean rays over the subject's
   geometry (t_d/a x t_h/a x X1h/X1d), one job per t_d/a node
   -> results/simulated_space/scale_free/geometry/neo_hookean.parquet (target
-  scale_free_geometry; not in the default target: 3 328 FE rays, some 45 CPU-min,
+  scale_free_geometry; not in the default target: 5 824 FE rays, some 70 CPU-min,
   so identify, diagnose and study read the one shipped with the package unless built)
 
 Developer rule, not in any target: `snakemake --cores 2 ship_scale_free_space`

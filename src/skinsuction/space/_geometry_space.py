@@ -50,8 +50,9 @@ _NODE_DIGITS = 4
 
 def _nodes(values, name: str) -> tuple:
     out = tuple(round_sig(float(v), _NODE_DIGITS) for v in values)
-    if len(out) < 4 or not all(b > a > 0 for a, b in zip(out, out[1:])):
-        raise ValueError(f"{name}: at least 4 positive, strictly increasing nodes, not {values!r}")
+    if len(out) < 5 or not all(b > a > 0 for a, b in zip(out, out[1:])):
+        raise ValueError(f"{name}: at least 5 positive, strictly increasing nodes (a cubic "
+                         f"stencil and a shifted one for the error estimate), not {values!r}")
     return out
 
 
@@ -62,16 +63,16 @@ class GeometryGrid:
     Parameters
     ----------
     td_nodes, th_nodes : sequence of float
-        Strictly increasing, at least 4 each (cubic interpolation), rounded to 4
-        significant digits.
+        Strictly increasing, at least 5 each (a cubic stencil, and a shifted one
+        for the error estimate), rounded to 4 significant digits.
 
     Examples
     --------
-    >>> g = GeometryGrid([0.2, 0.4, 0.8, 1.6], [0.5, 1, 2, 4])
+    >>> g = GeometryGrid([0.2, 0.4, 0.8, 1.6, 3.2], [0.5, 1, 2, 4, 8])
     >>> g.covers(0.3, 3.0), g.covers(0.1, 3.0)
     (True, False)
     >>> len(g.points)
-    16
+    25
     """
 
     td_nodes: tuple
@@ -164,7 +165,10 @@ class GeometrySpace:
         rays : ndarray, shape (n_r, 1, n_p)
             Deflections (mm) at the specification's pressures.
         info : dict
-            ``source`` ("geometry space"), ``rays``, ``stopped_early``.
+            ``source`` ("geometry space"), ``rays``, ``stopped_early``, and
+            ``error_estimate`` (n_r,): per ray, the largest change of log M when a
+            stencil is shifted by one node, a measure of the interpolation error
+            (:class:`OnDemandRays` solves the rays where it exceeds its tolerance).
 
         Raises
         ------
@@ -178,20 +182,46 @@ class GeometrySpace:
                              f"space (t_d/a {self.grid.td_nodes[0]:g}-{self.grid.td_nodes[-1]:g},"
                              f" t_h/a {self.grid.th_nodes[0]:g}-{self.grid.th_nodes[-1]:g})")
         index = _ratio_index(self.spec, ratio_nodes)
-        i, wi = self._td.weights([math.log(td_a)])
-        j, wj = self._th.weights([math.log(th_a)])
-        i, j, wi, wj = int(i[0]), int(j[0]), wi[0], wj[0]
-        block = self._log[i:i + wi.size, j:j + wj.size][:, :, index]  # (4, 4, n_r, n_p)
-        log_m = np.einsum("a,b,abrp->rp", wi, wj, block)
+        x, y = math.log(td_a), math.log(th_a)
+        (i,), (wi,) = self._td.weights([x])
+        (j,), (wj,) = self._th.weights([y])
+        log_m = self._combine(i, wi, j, wj, index)
         m = np.exp(log_m) * a
         m[:, self._zero] = 0.0
         # a ray is cut at its first NaN: beyond, the stencil lacks a node
-        bad = np.isnan(m)
-        cut = np.cumsum(bad, axis=1) > 0
+        cut = np.cumsum(np.isnan(m), axis=1) > 0
         m[cut] = np.nan
         info = {"source": "geometry space", "rays": len(index),
-                "stopped_early": int(cut[:, -1].sum())}
+                "stopped_early": int(cut[:, -1].sum()),
+                "error_estimate": self._error_estimate(log_m, x, y, i, wi, j, wj, index)}
         return m[:, None, :], info
+
+    def _combine(self, i, wi, j, wj, index):
+        """log M of the rays ``index`` on the 4 x 4 stencil starting at (i, j)."""
+        block = self._log[i:i + wi.size, j:j + wj.size][:, :, index]  # (4, 4, n_r, n_p)
+        return np.einsum("a,b,abrp->rp", wi, wj, block)
+
+    def _error_estimate(self, log_m, x, y, i, wi, j, wj, index):
+        """Per ray, the largest change of log M (about the relative error) when either
+        axis's stencil is shifted by one node, over the loads where both exist.
+
+        The shifted stencils hold the same cell, so their spread is of the order of
+        the interpolation error; a shift that meets a stopped ray is left out.
+        """
+        spread = np.zeros(len(index))
+        for axis, start, n in ((self._td, i, len(self.grid.td_nodes)),
+                               (self._th, j, len(self.grid.th_nodes))):
+            for s in (start - 1, start + 1):
+                if not 0 <= s <= n - 4:
+                    continue
+                if axis is self._td:
+                    other = self._combine(s, axis.weights_at([x], np.array([s]))[0], j, wj, index)
+                else:
+                    other = self._combine(i, wi, s, axis.weights_at([y], np.array([s]))[0], index)
+                d = np.abs(other - log_m)
+                d[~np.isfinite(d)] = 0.0
+                spread = np.maximum(spread, d.max(axis=1))
+        return spread
 
 
 def _ratio_index(spec: RaySpec, ratio_nodes) -> list:

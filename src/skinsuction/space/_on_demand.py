@@ -138,10 +138,15 @@ class OnDemandRays:
         solved.  "auto" (default): the workflow's build in the working directory,
         else the one shipped with the package, if it was solved with the same rays
         as ``spec`` (:func:`same_rays`).  None: every ray is solved.
+    tolerance : float
+        A ray read off the geometry space whose error estimate (the spread of log
+        M over shifted stencils, :meth:`GeometrySpace.rays`) exceeds this is solved
+        instead: the grid is exact at its nodes and smooth between them except
+        where a soft hypodermis lets a thin dermis bulge towards its limit load.
     """
 
     def __init__(self, spec, cache_dir=None, workers: int = 1, progress="stderr",
-                 geometry="auto"):
+                 geometry="auto", tolerance: float = 1e-3):
         import json
         import sys
 
@@ -154,6 +159,7 @@ class OnDemandRays:
         self.solved = 0  # geometries solved by this object (not read from the cache)
         self.geometry = _geometry_space(geometry, spec)
         self.interpolated = 0  # ray sets read off the geometry space
+        self.tolerance = float(tolerance)
 
     def _ray_ids(self, probe_mm, layers, cause=None, coordinate=None, ratio_nodes=None):
         """The ids of the rays at ``layers`` (by path), one per X1h/X1d node."""
@@ -214,8 +220,9 @@ class OnDemandRays:
         return np.stack(columns, axis=1), info
 
     def _from_geometry(self, ref, a, cause, c, nodes):
-        """The rays at ``ref`` (scaled by ``a``) read off the geometry space, or None
-        where it does not hold them (a cause other than a thickness, outside its grid)."""
+        """The rays at ``ref`` (scaled by ``a``) read off the geometry space, and the
+        nodes whose error estimate exceeds the tolerance (to be solved); None where
+        the space does not hold them (a cause other than a thickness, outside its grid)."""
         if self.geometry is None or (cause is not None and not cause.geometric):
             return None
         layers = _keywords(ref)
@@ -225,15 +232,29 @@ class OnDemandRays:
             return None
         m, info = self.geometry.rays(2.0, layers["t_d"], layers["t_h"], nodes)
         self.interpolated += 1
-        return m * a, {**info, "cache": "geometry space"}
+        return m * a, info
 
     def _read(self, ref, a, cause, c, nodes):
         """The rays at the reference layers ``ref`` (2 mm aperture) scaled by ``a``: read
-        off the geometry space, else from the cache file, the missing ones solved into
-        it first."""
+        off the geometry space where its error estimate is within the tolerance, else
+        from the cache file, the missing ones solved into it first."""
         found = self._from_geometry(ref, a, cause, c, nodes)
-        if found is not None:
-            return found
+        if found is None:
+            return self._read_cache(ref, a, cause, c, nodes)
+        m, info = found
+        est = info.pop("error_estimate")
+        uncertain = [k for k, e in enumerate(est) if not e <= self.tolerance]
+        info.update(cache="geometry space", rays_interpolated=len(nodes) - len(uncertain),
+                    rays_solved=len(uncertain), largest_error_estimate=float(np.max(est)))
+        if uncertain:
+            solved, sinfo = self._read_cache(ref, a, cause, c, [nodes[k] for k in uncertain])
+            m[uncertain] = solved
+            info.update(cache=sinfo["cache"], stopped_early=int(
+                np.isnan(m[:, 0, -1]).sum()))
+        return m, info
+
+    def _read_cache(self, ref, a, cause, c, nodes):
+        """The rays at ``ref`` scaled by ``a`` from the cache file, solved first if missing."""
         stem = "td{t_d:g}_th{t_h:g}".format(**_keywords(ref))
         if cause is None:
             path = self.dir / f"{stem}.parquet"
