@@ -34,12 +34,12 @@ import pandas as pd
 _CTX = {}
 
 
-def _init(space_dir, cache, geometry, side_by_side):
+def _init(space_dir, cache, geometry, side_by_side, tolerance):
     from skinsuction.space import BASELINE, OnDemandRays, read_ray_spaces
 
     base = read_ray_spaces(space_dir)[BASELINE]
     _CTX.update(base=base, solver=OnDemandRays(base.spec, cache_dir=cache, geometry=geometry,
-                                               progress=None))
+                                               progress=None, tolerance=tolerance))
     if side_by_side:
         _CTX["solved"] = OnDemandRays(base.spec, cache_dir=cache, geometry=None, progress=None)
 
@@ -51,9 +51,12 @@ def _run(job):
     (probe, t_d, t_h), points = job
     t0 = time.process_time()
     g = Geometry(t_d, t_h, given=("t_d", "t_h"))
+    before = _CTX["solver"].interpolated
     spaces, notes = spaces_at({BASELINE: _CTX["base"]}, [probe], g, _CTX["solver"])
     rays_cpu = time.process_time() - t0
-    source = "geometry space" if _CTX["solver"].interpolated else "solved"
+    source = "geometry space" if _CTX["solver"].interpolated > before else "solved"
+    solved_rays = sum(int(n.split("(")[1].split(" solved")[0]) for n in notes
+                      if "solved on demand where its error estimate" in n)
     solved = None
     if "solved" in _CTX:
         t0 = time.process_time()
@@ -65,6 +68,7 @@ def _run(job):
         rec = compare_point(spaces[BASELINE], pt)
         rec["rays_cpu_s"] = rays_cpu
         rec["rays_source"] = source
+        rec["rays_solved_of_16"] = solved_rays if source == "geometry space" else 16
         if solved is not None:
             rec["solved_mm"] = _read_at(solved, pt, rec["pressure_mbar"])
             rec["solved_rays_cpu_s"] = solved_cpu
@@ -95,6 +99,8 @@ def main(argv=None):
                     help="geometry space file (default: the workflow's build, else the shipped)")
     ap.add_argument("--no-geometry-space", action="store_true",
                     help="solve every geometry's rays (today's rays on demand)")
+    ap.add_argument("--tolerance", type=float, default=1e-3,
+                    help="error estimate above which a ray is solved (inf: never)")
     ap.add_argument("--side-by-side", action="store_true",
                     help="also solve the rays and compare both with the same FE runs")
     args = ap.parse_args(argv)
@@ -120,7 +126,7 @@ def main(argv=None):
     t0 = time.perf_counter()
     with ProcessPoolExecutor(args.workers, initializer=_init,
                              initargs=(args.space_dir, args.cache, geometry,
-                                       args.side_by_side)) as pool:
+                                       args.side_by_side, args.tolerance)) as pool:
         records = [r for rs in pool.map(_run, jobs) for r in rs]
     wall = time.perf_counter() - t0
     rows = []
@@ -128,7 +134,7 @@ def main(argv=None):
         solved = r.get("solved_mm") or [math.nan] * len(r["fe_mm"])
         for p, fe, sp, so in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"], solved):
             rows.append({k: r[k] for k in ("probe_mm", "t_d", "t_h", "x1d", "ratio", "p_max",
-                                           "rays_source")}
+                                           "rays_source", "rays_solved_of_16")}
                         | {"pressure_mbar": p, "fe_mm": fe, "space_mm": sp, "solved_mm": so})
     per_p = pd.DataFrame(rows)
     per_p["relative_error"] = (per_p["space_mm"] - per_p["fe_mm"]).abs() / per_p["fe_mm"].abs()
@@ -145,6 +151,10 @@ def main(argv=None):
           f"rays {pts.groupby(['probe_mm', 't_d', 't_h'])['rays_cpu_s'].first().median():.2f}"
           " CPU-s per geometry (median); sources: "
           f"{pts.groupby(['probe_mm', 't_d', 't_h'])['rays_source'].first().value_counts().to_dict()}")
+    geo = pts.groupby(["probe_mm", "t_d", "t_h"])["rays_solved_of_16"].first()
+    print(f"rays solved where the error estimate exceeded {args.tolerance:g}: "
+          f"{int(geo.sum())} of {16 * len(geo)} ({100 * geo.sum() / (16 * len(geo)):.1f} %); "
+          f"geometries with none solved: {int((geo == 0).sum())} of {len(geo)}")
     if args.side_by_side:
         print(f"rays solved on demand: {pts.groupby(['probe_mm', 't_d', 't_h'])['solved_rays_cpu_s'].first().median():.1f}"
               " CPU-s per geometry (median)")

@@ -301,11 +301,31 @@ def add_geometry_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--hypodermis-thickness-sd-mm", type=positive, default=None, metavar="MM",
                    help="its standard deviation, mm")
     g.add_argument("--no-solve", action="store_true",
-                   help="refuse a probe or layers the simulated space lacks instead of solving "
-                        "their 16 neo-Hookean FE rays a probe on demand (10-40 s of CPU each, "
-                        "cached in $SKINSUCTION_CACHE or ~/.cache/skinsuction)")
+                   help="refuse a probe or layers the simulated space lacks instead of reading "
+                        "their rays off the geometry space or solving them on demand (16 FE "
+                        "rays a probe, 10-40 s of CPU, cached in $SKINSUCTION_CACHE or "
+                        "~/.cache/skinsuction)")
+    g.add_argument("--solve-rays", action="store_true",
+                   help="solve every ray at the subject's probe and layers instead of reading "
+                        "the geometry space (the FE reference: minutes instead of seconds)")
     g.add_argument("--workers", type=positive_int, default=1,
                    help="processes for rays solved on demand (default 1)")
+
+
+def solve_from_args(args: argparse.Namespace):
+    """``solve_on_demand`` from ``--no-solve`` and ``--solve-rays``: False, True or "always".
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+
+    Returns
+    -------
+    bool or str
+    """
+    if args.no_solve and args.solve_rays:
+        raise SystemExit("--no-solve and --solve-rays contradict each other: give one")
+    return False if args.no_solve else ("always" if args.solve_rays else True)
 
 
 def thickness_from_args(args: argparse.Namespace) -> dict:

@@ -33,6 +33,7 @@ from ._common import (
     add_repeats,
     add_seed,
     add_space,
+    solve_from_args,
     thickness_from_args,
     writing,
 )
@@ -138,7 +139,8 @@ def run(args: argparse.Namespace) -> int:
     with _space_errors():
         report = diagnose_file(data, args.space_dir, settings,
                                thickness=thickness_from_args(args),
-                               on_demand=False if args.no_solve else None,
+                               on_demand={False: False, True: None}.get(
+                                   solve_from_args(args), "always"),
                                workers=args.workers)
     with writing(args.out):
         paths = write_report(report, args.out)
@@ -159,7 +161,8 @@ def _run_time(args: argparse.Namespace, settings, data) -> int:
     with _space_errors():
         report = diagnose_time_file(data, args.space_dir, settings,
                                     thickness=thickness_from_args(args),
-                                    solve_on_demand=not args.no_solve, workers=args.workers)
+                                    solve_on_demand=solve_from_args(args),
+                                    workers=args.workers)
     with writing(args.out):
         paths = write_time_report(report, args.out)
     for w in report["warnings"]:

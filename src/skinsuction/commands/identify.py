@@ -34,6 +34,7 @@ from ._common import (
     add_seed,
     add_space,
     interval_text,
+    solve_from_args,
     thickness_from_args,
     writing,
 )
@@ -150,7 +151,7 @@ def run(args: argparse.Namespace) -> int:
         probe_mm=6.0 if args.probe is None else args.probe,
         alpha=args.alpha, repeats=args.repeats, seed=args.seed, bottom=args.bottom,
         curve=args.curve, noise_um=args.noise_um, level=args.level,
-        thickness=thickness_from_args(args), solve_on_demand=not args.no_solve,
+        thickness=thickness_from_args(args), solve_on_demand=solve_from_args(args),
         workers=args.workers,
     )
     with writing(args.out):
@@ -234,7 +235,7 @@ def _run_time(args: argparse.Namespace, data) -> int:
         probes=None if args.probe is None else [args.probe], curve=args.curve,
         repeats=repeats, seed=args.seed, noise_um=args.noise_um, level=args.level,
         phases=args.phases, thickness=thickness_from_args(args),
-        solve_on_demand=not args.no_solve, workers=args.workers, effect=args.effect,
+        solve_on_demand=solve_from_args(args), workers=args.workers, effect=args.effect,
         fe_correction=args.fe_correction)
     with writing(args.out):
         paths = write_identification(result, args.out)

@@ -223,9 +223,10 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
         The ray spaces already read (from ``space_dir``).
     thickness : dict, optional
         ``dermis_thickness_mm`` ... overriding the file's header lines.
-    on_demand : OnDemandRays or bool, optional
+    on_demand : OnDemandRays, bool or "always", optional
         An :class:`skinsuction.space.OnDemandRays`, False to refuse a probe or
-        layers the spaces lack, or None to solve them.
+        layers the spaces lack, None to read them off the geometry space or solve
+        them, "always" to solve every one (the reference).
     workers : int
         Processes that solve rays on demand.
     pairs : dict, optional
@@ -240,7 +241,13 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
     from skinsuction._files import file_sha256
     from skinsuction.measured import MeasuredData, check_against_space, geometry_of, load_measured
 
-    from skinsuction.space import OnDemandRays, pairs_for, read_ray_spaces, resolve_space
+    from skinsuction.space import (
+        OnDemandRays,
+        geometry_file_for,
+        pairs_for,
+        read_ray_spaces,
+        resolve_space,
+    )
 
     if spaces is None or space_dir is not None:
         src = resolve_space(space_dir)
@@ -265,7 +272,10 @@ def diagnose_file(measured_path, space_dir=None, settings: Settings | None = Non
     geometry, warnings = geometry_of(data, **(thickness or {}))
     solver = None
     if on_demand is not False:
-        solver = on_demand if on_demand not in (None, True) else OnDemandRays(sp, workers=workers)
+        solver = on_demand
+        if on_demand in (None, True, "always"):
+            solver = OnDemandRays(sp, workers=workers, geometry=geometry_file_for(
+                resolve_space(space_dir).path, on_demand if on_demand == "always" else True))
     if pairs is None:
         pairs = pairs_for(space_dir, sp)
     report = diagnose(data, spaces, settings, source=source, geometry=geometry, on_demand=solver,

@@ -144,10 +144,11 @@ def identify_measured(
     thickness : dict, optional
         ``dermis_thickness_mm``, ``hypodermis_thickness_mm`` and their ``_sd_mm``:
         override the file's header lines (:func:`skinsuction.measured.geometry_of`).
-    solve_on_demand, workers : bool, int
-        Solve the neo-Hookean rays of a probe or layers the scale-free space lacks
-        (:class:`skinsuction.space.OnDemandRays`; False refuses such a file), in
-        ``workers`` processes.
+    solve_on_demand, workers : bool or "always", int
+        Give a probe or layers the scale-free space lacks their neo-Hookean rays
+        (:class:`skinsuction.space.OnDemandRays`): read off the geometry space, or
+        solved where it does not hold them, in ``workers`` processes; "always"
+        solves every one; False refuses such a file.
 
     Returns
     -------

@@ -72,8 +72,9 @@ def identify_time_file(path, space_path=None, *, thickness=None, solve_on_demand
         The scale-free space (default: :func:`skinsuction.space.load_space`'s).
     thickness : dict, optional
         Layer thicknesses overriding the file's header.
-    solve_on_demand : bool
-        Solve the rays of a probe or layers the space lacks.
+    solve_on_demand : bool or "always"
+        Give a probe or layers the space lacks their rays (the geometry space, else
+        solved; "always": solved), or refuse them (False).
     workers : int
         Processes for those solves.
     **options

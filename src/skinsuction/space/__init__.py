@@ -87,7 +87,7 @@ from ._interpolate import GriddedSpace, SpaceInterpolant, evaluate, interpolate_
 from ._lagrange import LagrangeAxis
 from ._coordinates import SpaceCoordinates, load, reference_pressure, similar_length
 from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
-from ._open import LoadedSpace, ProbeSpace, load_space
+from ._open import LoadedSpace, ProbeSpace, geometry_file_for, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
 from ._pair_interpolate import PairRayInterpolant, interpolant
 from ._pairs import (
@@ -211,6 +211,7 @@ __all__ = [
     "default_cache_dir", "spaces_at", "ThicknessNuisance", "window_nodes",
     "GEOMETRY_FOLDER", "GeometryGrid", "GeometrySpace", "assemble_geometry_space",
     "default_geometry_file", "read_geometry_space", "same_rays", "ship_geometry_space",
+    "geometry_file_for",
     "THICKNESS_RESOLUTION_MM", "LAYER_PATHS", "layer_thicknesses",
     "SpaceCoordinates", "load", "reference_pressure", "similar_length",
 ]

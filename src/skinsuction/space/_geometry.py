@@ -311,9 +311,20 @@ def _neo_hookean_rays(at: _Measurement) -> dict:
         solved.append((p, info))
     for p, info in solved:
         at.notes.append(f"neo-Hookean rays of the {p:g} mm probe at {at.where()}"
-                        f" solved on demand ({info['rays']} FE rays, {info['stopped_early']} "
-                        f"stopped early; cached in {info['cache']})")
+                        f" {_source(info)} ({info['rays']} rays, {info['stopped_early']} "
+                        f"stopped early; {info['cache']})")
     return rays
+
+
+def _source(info: dict) -> str:
+    """Where rays on demand came from, for the notes: the geometry space, solved, or both."""
+    read = info.get("rays_interpolated", 0)
+    if not read:
+        return "solved on demand"
+    solved = info.get("rays_solved", 0)
+    return ("read off the geometry space" + (
+        f" ({solved} solved on demand where its error estimate exceeded the tolerance)"
+        if solved else ""))
 
 
 def _solved_cause(name: str, space: RaySpace, at: _Measurement, ratio_window) -> RaySpace:
@@ -322,19 +333,20 @@ def _solved_cause(name: str, space: RaySpace, at: _Measurement, ratio_window) ->
     full = at.base.spec.ratio_nodes
     nodes = window_nodes(full, ratio_window)
     keep = [full.index(r) for r in nodes]
-    arrays, n_rays, n_stopped = {}, 0, 0
+    arrays, total = {}, {"rays": 0, "stopped_early": 0, "rays_interpolated": 0,
+                         "rays_solved": 0}
     for p in at.probes:
         if at.default and space.has_probe(p):
             arrays[p] = space.rays(p)[keep]
             continue
         arrays[p], info = at.on_demand.rays(p, at.layers, space.cause, **_subset(nodes, full))
-        n_rays += info["rays"]
-        n_stopped += info["stopped_early"]
+        for k in total:
+            total[k] += info.get(k, 0)
     window = ("" if len(nodes) == len(full) else
               f", X1h/X1d {nodes[0]:g}-{nodes[-1]:g} only ({len(nodes)} of "
               f"{len(full)} nodes)")
-    at.notes.append(f"{name}: its rays at this geometry solved on demand ({n_rays} FE "
-                    f"rays, {n_stopped} stopped early{window})")
+    at.notes.append(f"{name}: its rays at this geometry {_source(total)} ({total['rays']} "
+                    f"rays, {total['stopped_early']} stopped early{window})")
     return RaySpace(space.cause, replace(at.spec, ratio_nodes=nodes),
                     np.asarray(space.cause.nodes, dtype=float), arrays,
                     {**space.metadata, "geometry": at.geometry.to_dict()})

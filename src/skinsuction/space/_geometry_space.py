@@ -32,7 +32,7 @@ import pandas as pd
 
 from ._lagrange import LagrangeAxis
 from ._rays import RaySpec, _ray_params, ray_id
-from ._storage import _read_parquet, _write_parquet, round_sig
+from ._storage import _read_parquet, round_sig
 
 __all__ = ["GeometryGrid", "GeometrySpace", "assemble_geometry_space",
            "read_geometry_space", "GEOMETRY_FOLDER", "same_rays",
@@ -275,20 +275,40 @@ def assemble_geometry_space(bundle_paths, out_path, spec: RaySpec, grid: Geometr
     m = np.stack([by_ray[rid].sort_values("pressure_mbar")["deflection_mm"].to_numpy(float)
                   for rid in ids])
     m = m.reshape(len(grid.td_nodes), len(grid.th_nodes), len(spec.ratio_nodes), n_p)
-    keep = ("converged", "last_converged_mbar", "mesh_fallback", "seconds", "newton_iterations")
-    rays = {rid: {k: infos.get(rid, {}).get(k) for k in keep} for rid in ids}
-    d, h, r = np.meshgrid(np.arange(len(grid.td_nodes)), np.arange(len(grid.th_nodes)),
-                          np.arange(len(spec.ratio_nodes)), indexing="ij")
-    frame = pd.DataFrame({
-        "t_d_over_a": np.repeat(np.asarray(grid.td_nodes)[d.ravel()], n_p),
-        "t_h_over_a": np.repeat(np.asarray(grid.th_nodes)[h.ravel()], n_p),
-        "ratio": np.repeat(np.asarray(spec.ratio_nodes)[r.ravel()], n_p),
-        "pressure_mbar": np.tile(np.asarray(spec.pressures_mbar, float), len(ids)),
-        "deflection_mm": m.reshape(-1)})
-    meta = {"spec": spec.to_dict(), "grid": grid.to_dict(), "rays": rays,
+    info = [infos.get(rid, {}) for rid in ids]
+    meta = {"spec": spec.to_dict(), "grid": grid.to_dict(),
+            "layout": "deflection_mm in C order over (t_d/a, t_h/a, X1h/X1d, pressure)",
+            "rays": len(ids),
+            # the solver's record, compact: only the rays that stopped or needed a fallback
+            "stopped_early": {rid: i.get("last_converged_mbar") for rid, i in zip(ids, info)
+                              if not i.get("converged", True)},
+            "mesh_fallback": {rid: i.get("mesh_fallback") for rid, i in zip(ids, info)
+                              if i.get("mesh_fallback")},
+            "cpu_s": round(sum(float(i.get("seconds") or 0.0) for i in info), 1),
             "provenance": dict(provenance or {})}
-    _write_parquet(frame, out_path, meta)
+    _write_compact(m.reshape(-1), out_path, meta)
     return GeometrySpace(spec, grid, m, meta["provenance"])
+
+
+def _write_compact(values, path, meta: dict) -> None:
+    """One float column, zstd with byte-stream split: a third of the default size, so
+    the shipped file stays small (the node coordinates are in ``meta``)."""
+    import json
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from skinsuction._files import atomic_output
+    from skinsuction.provenance import jsonable
+
+    from ._storage import METADATA_KEY
+
+    table = pa.table({"deflection_mm": np.asarray(values, dtype=float)})
+    table = table.replace_schema_metadata(
+        {METADATA_KEY: json.dumps(jsonable(meta), sort_keys=True).encode()})
+    with atomic_output(path) as tmp:
+        pq.write_table(table, tmp, compression="zstd", compression_level=9,
+                       use_dictionary=False, use_byte_stream_split=True)
 
 
 def read_geometry_space(path) -> GeometrySpace:
@@ -370,11 +390,10 @@ def ship_geometry_space(built_file, dest=None, *, build_command: str | None = No
 
     out = Path(dest or SHIPPED_SPACE_DIR) / GEOMETRY_FOLDER
     space = read_geometry_space(built_file)
-    frame, meta = _read_parquet(built_file)
+    _, meta = _read_parquet(built_file)
     out.mkdir(parents=True, exist_ok=True)
     with atomic_output(out / GEOMETRY_FILE) as tmp:
         shutil.copyfile(built_file, tmp)
-    rays = meta.get("rays") or {}
     git = git_info(repo)
     record = jsonable({
         "what": "the neo-Hookean rays of skinsuction's default space over the subject's "
@@ -386,9 +405,8 @@ def ship_geometry_space(built_file, dest=None, *, build_command: str | None = No
         "build_command": build_command,
         "built": space.provenance,
         "ray_spec": space.spec.to_dict(), "grid": space.grid.to_dict(),
-        "rays": len(rays),
-        "stopped_early": sum(1 for r in rays.values() if not r.get("converged", True)),
-        "cpu_s": round(sum(float(r.get("seconds") or 0.0) for r in rays.values()), 1),
+        "rays": meta.get("rays"), "stopped_early": len(meta.get("stopped_early") or {}),
+        "mesh_fallback": len(meta.get("mesh_fallback") or {}), "cpu_s": meta.get("cpu_s"),
         "files": {GEOMETRY_FILE: {"sha256": file_sha256(out / GEOMETRY_FILE),
                                   "bytes": (out / GEOMETRY_FILE).stat().st_size}},
     })

@@ -215,8 +215,8 @@ class OnDemandRays:
                 m, info = self._read(ref, a, cause, c, nodes)
             columns.append(m[:, 0])
             infos.append(info)
-        info = {"cache": str(self.dir), "rays": sum(i["rays"] for i in infos),
-                "stopped_early": sum(i["stopped_early"] for i in infos)}
+        info = {"cache": str(self.dir), **{k: sum(i.get(k, 0) for i in infos) for k in (
+            "rays", "stopped_early", "rays_interpolated", "rays_solved")}}
         return np.stack(columns, axis=1), info
 
     def _from_geometry(self, ref, a, cause, c, nodes):

@@ -410,7 +410,33 @@ class LoadedSpace:
         return next((n for n in notes if "scale-free" in n), notes[0])
 
 
-def load_space(space_path=None, bottom: str = "fixed", *, solve_on_demand: bool = True,
+def geometry_file_for(space_path, solve_on_demand=True):
+    """The geometry space that rays on demand read first (their ``geometry``).
+
+    Parameters
+    ----------
+    space_path : path-like
+        The scale-free space (its folder or its ``neo_hookean.parquet``).
+    solve_on_demand : bool or "always"
+        "always": every ray solved, no geometry space.
+
+    Returns
+    -------
+    Path, "auto" or None
+        The one in the space's folder (``geometry/neo_hookean.parquet``), else
+        "auto" (the default one, :func:`default_geometry_file`); None for "always".
+    """
+    from ._geometry_space import GEOMETRY_FILE, GEOMETRY_FOLDER
+
+    if solve_on_demand == "always":
+        return None
+    space_path = Path(space_path)
+    folder = space_path if space_path.is_dir() else space_path.parent
+    own = folder / GEOMETRY_FOLDER / GEOMETRY_FILE
+    return own if own.is_file() else "auto"
+
+
+def load_space(space_path=None, bottom: str = "fixed", *, solve_on_demand: bool | str = True,
                cache_dir=None, workers: int = 1) -> LoadedSpace:
     """Read a simulated space once, whatever its layout.
 
@@ -425,10 +451,13 @@ def load_space(space_path=None, bottom: str = "fixed", *, solve_on_demand: bool 
         ``info`` says which (``source``, ``description``).
     bottom : str
         Bottom condition of the curves to use.
-    solve_on_demand : bool
-        On the scale-free space, solve the neo-Hookean rays of an aperture or of
-        layer thicknesses the space lacks (16 FE rays a probe, cached in
-        ``cache_dir``; :class:`skinsuction.space.OnDemandRays`). False refuses them.
+    solve_on_demand : bool or "always"
+        On the scale-free space, give a measurement the rays of an aperture or of
+        layer thicknesses the space lacks (:class:`skinsuction.space.OnDemandRays`):
+        read off the geometry space next to it (``<space>/geometry/``, else the
+        default one) where it holds them within its tolerance, else solved (16 FE
+        rays a probe, cached in ``cache_dir``).  "always": solve every one, the
+        geometry space unread (the reference).  False refuses them.
     cache_dir : path-like, optional
         Where rays solved on demand are kept (default
         :func:`skinsuction.space.default_cache_dir`).
@@ -479,5 +508,6 @@ def load_space(space_path=None, bottom: str = "fixed", *, solve_on_demand: bool 
             **src.info()}
     on_demand = None
     if rays is not None and solve_on_demand:
-        on_demand = OnDemandRays(rays.spec, cache_dir=cache_dir, workers=workers)
+        on_demand = OnDemandRays(rays.spec, cache_dir=cache_dir, workers=workers,
+                                 geometry=geometry_file_for(sp, solve_on_demand))
     return LoadedSpace(spaces, info, p_range, bottom, rays, None, on_demand)

@@ -240,7 +240,8 @@ def verify_shipped_files(folder=SHIPPED_SPACE_DIR) -> list:
     """Problems of a shipped folder against its ``PROVENANCE.json`` (empty: all agree).
 
     Every file listed must be there with its SHA-256 and row count, and no
-    other model file may be.
+    other model file may be; the same for the pair spaces (``pairs/``) and the
+    geometry space (``geometry/``) against their own ``PROVENANCE.json``.
 
     Parameters
     ----------
@@ -277,25 +278,26 @@ def verify_shipped_files(folder=SHIPPED_SPACE_DIR) -> list:
     for path in sorted(folder.glob("*.parquet")):
         if path.name not in listed:
             problems.append(f"{path.name}: not listed in {PROVENANCE_FILE}")
-    return problems + _verify_pairs(folder)
+    return problems + _verify_subfolder(folder, "pairs") + _verify_subfolder(folder, "geometry")
 
 
-def _verify_pairs(folder: Path) -> list:
-    """The pair spaces' files against their own ``pairs/PROVENANCE.json``."""
-    pairs = folder / "pairs"
-    files = sorted(pairs.glob("*.parquet"))
-    prov = shipped_provenance(pairs) if pairs.is_dir() else None
+def _verify_subfolder(folder: Path, sub: str) -> list:
+    """A subfolder's files (the pair spaces, the geometry space) against its own
+    ``PROVENANCE.json``."""
+    where = folder / sub
+    files = sorted(where.glob("*.parquet"))
+    prov = shipped_provenance(where) if where.is_dir() else None
     if prov is None:
-        return [f"pairs/{p.name}: no pairs/{PROVENANCE_FILE}" for p in files]
+        return [f"{sub}/{p.name}: no {sub}/{PROVENANCE_FILE}" for p in files]
     listed = prov.get("files") or {}
-    out = [f"pairs/{p.name}: not listed in pairs/{PROVENANCE_FILE}" for p in files
+    out = [f"{sub}/{p.name}: not listed in {sub}/{PROVENANCE_FILE}" for p in files
            if p.name not in listed]
     for name, rec in sorted(listed.items()):
-        path = pairs / name
+        path = where / name
         if not path.is_file():
-            out.append(f"pairs/{name}: listed in pairs/{PROVENANCE_FILE} but missing")
+            out.append(f"{sub}/{name}: listed in {sub}/{PROVENANCE_FILE} but missing")
         elif file_sha256(path) != rec.get("sha256"):
-            out.append(f"pairs/{name}: its SHA-256 differs from pairs/{PROVENANCE_FILE}'s")
+            out.append(f"{sub}/{name}: its SHA-256 differs from {sub}/{PROVENANCE_FILE}'s")
     return out
 
 
