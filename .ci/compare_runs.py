@@ -12,7 +12,10 @@ understood, told apart by their columns:
   the points, their `converged` flags and `last_converged_mbar` must be equal;
 * a scale-free space (skinsuction.space.assemble_ray_space): one ray
   per (probe_mm, ratio, coordinate); the rays and their `converged` flags (the
-  per-ray solver record in the file's metadata) must be equal.
+  per-ray solver record in the file's metadata) must be equal;
+* a geometry space (skinsuction.space.assemble_geometry_space): one column of
+  deflections over the grid in the metadata; the grid, the ray specification and
+  the rays that stopped early must be equal.
 
 In both, the pressures must be the same and every deflection equal within
 ``rtol`` relative (|a - b| <= rtol * max(|a|, |b|)), NaN (beyond the last
@@ -124,6 +127,21 @@ def compare_rays(fa, fb, meta_a, meta_b, rtol):
                       "nan": n_nan, "worst": worst, "values": len(fa)}
 
 
+def compare_geometry(fa, fb, meta_a, meta_b, rtol):
+    problems = []
+    for key in ("grid", "spec", "stopped_early"):
+        if meta_a.get(key) != meta_b.get(key):
+            problems.append(f"{key} differs")
+    if len(fa) != len(fb):
+        problems.append(f"{len(fa)} and {len(fb)} deflections")
+        return problems, {}
+    worst, n_nan = compare_values(fa["deflection_mm"], fb["deflection_mm"], rtol, problems)
+    n = int(meta_a.get("rays") or 0)
+    return problems, {"kind": "geom", "units": "rays", "n": n,
+                      "converged": n - len(meta_a.get("stopped_early") or {}),
+                      "nan": n_nan, "worst": worst, "values": len(fa)}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("run_a", type=Path)
@@ -162,6 +180,8 @@ def main(argv=None) -> int:
             problems, s = compare_grid(fa, fb, args.rtol)
         elif {"ratio", "coordinate"} <= set(fa.columns) & set(fb.columns):
             problems, s = compare_rays(fa, fb, ma, mb, args.rtol)
+        elif "grid" in ma and "grid" in mb:
+            problems, s = compare_geometry(fa, fb, ma, mb, args.rtol)
         else:
             print(f"{name:<56} not a simulated space (columns {list(fa.columns)[:6]})")
             status = max(status, 2)

@@ -29,6 +29,10 @@
 #                                                  simulate_ray_bundle (grouped) + assemble_scale_free_space
 #                                                  (X1h/X1d cut to 0.001 and 0.1: 4 bundles; the
 #                                                  6 mm ray at 0.001 stops early, so a NaN tail is compared)
+#   results/simulated_space/scale_free/geometry/neo_hookean.parquet
+#                                                  simulate_geometry_bundle (grouped) + assemble_geometry_space
+#                                                  (a 5 x 5 grid of t_d/a, t_h/a: 5 jobs of 10 rays,
+#                                                  one SLURM job)
 #   results/figures/fig4_single_probe.png          simulate_test_curve, identification_test_curves,
 #                                                  identification_runs (one identification study) and
 #                                                  one figure (test point moved inside the cut space)
@@ -43,7 +47,7 @@
 #   SLURM_E2E_CORES=N      cores of one bundle (group) job, snakemake --cores (default: nproc)
 #   SLURM_E2E_MEM_MB=M     memory of one bundle job, snakemake --resources mem_mb=M, and
 #                          cap of every job's mem_mb (default: min(2000 x cores, node memory))
-#   SLURM_E2E_GROUP_COMPONENTS="fe_curves=9 fe_rays=2"
+#   SLURM_E2E_GROUP_COMPONENTS="fe_curves=9 fe_rays=2 fe_geometry=5"
 #                          grid points / ray bundles per cluster job (profile: 50 and 16)
 #   SLURM_E2E_SETUP=0      use the running cluster as it is: install, configure and start
 #                          nothing (and use the plugin's default status command, sacct)
@@ -233,14 +237,19 @@ identification:
   target: {x1d: 0.035, x1h: 0.0009}     # inside the cut space
 scale_free_space:
   ratio: [0.001, 0.1]                   # the 6 mm ray at 0.001 stops early (NaN tail)
+  geometry:                             # 5 x 5 nodes x 2 X1h/X1d = 50 rays in 5 jobs
+    t_d_over_a: [0.3, 0.45, 0.7, 1.0, 1.5]
+    t_h_over_a: [0.5, 1.0, 2.0, 4.0, 8.0]
 EOF
 CONFIG_ARGS=(--configfile config/ci.yaml "$OVERLAY")  # ci.yaml: whole_config
 TARGETS=(
     results/simulated_space/paper.parquet
     results/simulated_space/scale_free/neo_hookean.parquet
+    results/simulated_space/scale_free/geometry/neo_hookean.parquet
     results/figures/fig4_single_probe.png
 )
-DATABASES=(results/simulated_space/paper.parquet results/simulated_space/scale_free/neo_hookean.parquet)
+DATABASES=(results/simulated_space/paper.parquet results/simulated_space/scale_free/neo_hookean.parquet
+           results/simulated_space/scale_free/geometry/neo_hookean.parquet)
 
 # --------------------------------------------------------------- local run
 # in the background, beside the SLURM run (which leaves cores idle while it
@@ -262,7 +271,7 @@ LOCAL_PID=$!
 # capped at what one job may get here, bundle size from --cores/--resources.
 CORES=${SLURM_E2E_CORES:-$(nproc)}
 MEM_MB=${SLURM_E2E_MEM_MB:-$((2000 * CORES < NODE_MEM_MB ? 2000 * CORES : NODE_MEM_MB))}
-GROUP_COMPONENTS=${SLURM_E2E_GROUP_COMPONENTS:-fe_curves=9 fe_rays=2}
+GROUP_COMPONENTS=${SLURM_E2E_GROUP_COMPONENTS:-fe_curves=9 fe_rays=2 fe_geometry=5}
 PARTITION=${SLURM_PARTITION:-$DEFAULT_PARTITION}
 STATUS=${SLURM_E2E_STATUS_COMMAND:-$DEFAULT_STATUS}
 mapfile -t RES_ARGS < <(
@@ -337,6 +346,7 @@ if ! squeue --states=all -h --name "$RUN_ID" -o '%.8i %.10T %.10M  %k' | sort -n
 fi
 # every rule of the subset went through SLURM (the log path names the rule or group)
 for what in group_fe_curves_simulate_point group_fe_rays_simulate_ray_bundle \
+    group_fe_geometry_simulate_geometry_bundle rule_assemble_geometry_space \
     rule_assemble_space rule_assemble_scale_free_space rule_simulate_test_curve \
     rule_identification_test_curves rule_identification_runs rule_fig4_single_probe; do
     n=$(grep -c "slurm_logs/$what/" <<<"$SUBMITTED" || true)

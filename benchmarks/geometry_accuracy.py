@@ -42,6 +42,9 @@ def _init(space_dir, cache, geometry, side_by_side, tolerance):
                                                progress=None, tolerance=tolerance))
     if side_by_side:
         _CTX["solved"] = OnDemandRays(base.spec, cache_dir=cache, geometry=None, progress=None)
+    if geometry is not None:  # the grid alone, every ray read whatever its error estimate
+        _CTX["raw"] = OnDemandRays(base.spec, cache_dir=cache, geometry=geometry, progress=None,
+                                   tolerance=math.inf)
 
 
 def _run(job):
@@ -62,10 +65,15 @@ def _run(job):
         t0 = time.process_time()
         solved = spaces_at({BASELINE: _CTX["base"]}, [probe], g, _CTX["solved"])[0][BASELINE]
         solved_cpu = time.process_time() - t0
+    raw = None
+    if "raw" in _CTX and _CTX["raw"].geometry.grid.covers(2 * t_d / probe, 2 * t_h / probe):
+        raw = spaces_at({BASELINE: _CTX["base"]}, [probe], g, _CTX["raw"])[0][BASELINE]
     out = []
     for (x1d, ratio, p_max, p_step) in points:
         pt = AccuracyPoint(BASELINE, probe, x1d, ratio, math.nan, p_max, p_step, t_d, t_h)
         rec = compare_point(spaces[BASELINE], pt)
+        if raw is not None:
+            rec["raw_mm"] = _read_at(raw, pt, rec["pressure_mbar"])
         rec["rays_cpu_s"] = rays_cpu
         rec["rays_source"] = source
         rec["rays_solved_of_16"] = solved_rays if source == "geometry space" else 16
@@ -132,14 +140,18 @@ def main(argv=None):
     rows = []
     for r in records:
         solved = r.get("solved_mm") or [math.nan] * len(r["fe_mm"])
-        for p, fe, sp, so in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"], solved):
+        raw = r.get("raw_mm") or [math.nan] * len(r["fe_mm"])
+        for p, fe, sp, so, ra in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"], solved,
+                                     raw):
             rows.append({k: r[k] for k in ("probe_mm", "t_d", "t_h", "x1d", "ratio", "p_max",
                                            "rays_source", "rays_solved_of_16")}
-                        | {"pressure_mbar": p, "fe_mm": fe, "space_mm": sp, "solved_mm": so})
+                        | {"pressure_mbar": p, "fe_mm": fe, "space_mm": sp, "solved_mm": so,
+                           "raw_mm": ra})
     per_p = pd.DataFrame(rows)
     per_p["relative_error"] = (per_p["space_mm"] - per_p["fe_mm"]).abs() / per_p["fe_mm"].abs()
-    per_p["solved_relative_error"] = ((per_p["solved_mm"] - per_p["fe_mm"]).abs()
-                                      / per_p["fe_mm"].abs())
+    for k in ("solved", "raw"):
+        per_p[f"{k}_relative_error"] = ((per_p[f"{k}_mm"] - per_p["fe_mm"]).abs()
+                                        / per_p["fe_mm"].abs())
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     per_p.to_csv(out, index=False)
@@ -166,7 +178,7 @@ def main(argv=None):
         return (f"median {100 * np.median(v):.3f} %, 95th percentile "
                 f"{100 * np.percentile(v, 95):.3f} %, max {100 * v.max():.3f} %")
 
-    columns = [("relative_error", "rays read")]
+    columns = [("relative_error", "rays read"), ("raw_relative_error", "grid alone")]
     if args.side_by_side:
         columns.append(("solved_relative_error", "rays solved"))
     bands = pd.cut(per_p["probe_mm"], [2, 3, 5, 7, 8.0001], right=False,
