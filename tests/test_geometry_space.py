@@ -207,3 +207,29 @@ def test_the_default_geometry_space_is_the_fe_model_at_an_off_node_geometry(tmp_
     ok = np.isfinite(read) & np.isfinite(solved) & (solved > 0)
     assert ok.sum() > 0.9 * np.isfinite(solved).sum()
     assert np.max(np.abs(read[ok] / solved[ok] - 1)) < 2e-3
+
+
+@pytest.mark.skipif(default_geometry_file() is None, reason="no geometry space built or shipped")
+def test_two_seeded_random_rays_of_the_default_geometry_space_are_todays_fe_model():
+    """A change of the FE code must be shipped again: two of its rays, re-solved."""
+    from skinsuction.space import compute_ray
+    from skinsuction.space._storage import _read_parquet
+
+    path = default_geometry_file()
+    space = read_geometry_space(path)
+    stopped = _read_parquet(path)[1]["stopped_early"]
+    grid, spec = space.grid, space.spec
+    rng = np.random.default_rng(27)
+    ids = grid.ray_ids(spec)
+    for k in rng.choice(len(ids), size=2, replace=False):
+        i, j, r = np.unravel_index(k, space.deflection.shape[:3])
+        assert f"td{grid.td_nodes[i]:g}_th{grid.th_nodes[j]:g}" in ids[k]
+        curve, _, info = compute_ray(ids[k], spec.pressures_mbar, spec.mesh, list(spec.fallback))
+        fresh = np.asarray(curve.deflection_mm, float)
+        if not info["converged"]:
+            fresh[~(np.asarray(spec.pressures_mbar) <= info["last_converged_mbar"])] = np.nan
+        stored = space.deflection[i, j, r]
+        assert (ids[k] in stopped) == (not info["converged"])
+        assert np.array_equal(np.isnan(fresh), np.isnan(stored)), ids[k]
+        ok = np.isfinite(fresh)
+        assert np.allclose(stored[ok], fresh[ok], rtol=1e-6, atol=1e-9), ids[k]
