@@ -107,7 +107,7 @@ def main(argv=None):
                     help="geometry space file (default: the workflow's build, else the shipped)")
     ap.add_argument("--no-geometry-space", action="store_true",
                     help="solve every geometry's rays (today's rays on demand)")
-    ap.add_argument("--tolerance", type=float, default=1e-3,
+    ap.add_argument("--tolerance", type=float, default=1e-2,
                     help="error estimate above which a ray is solved (inf: never)")
     ap.add_argument("--side-by-side", action="store_true",
                     help="also solve the rays and compare both with the same FE runs")

@@ -310,9 +310,10 @@ def _neo_hookean_rays(at: _Measurement) -> dict:
         rays[p], info = at.on_demand.rays(p, at.layers)
         solved.append((p, info))
     for p, info in solved:
+        where = "" if info["cache"] == "geometry space" else f"; cached in {info['cache']}"
         at.notes.append(f"neo-Hookean rays of the {p:g} mm probe at {at.where()}"
                         f" {_source(info)} ({info['rays']} rays, {info['stopped_early']} "
-                        f"stopped early; {info['cache']})")
+                        f"stopped early{where})")
     return rays
 
 

@@ -146,7 +146,7 @@ class OnDemandRays:
     """
 
     def __init__(self, spec, cache_dir=None, workers: int = 1, progress="stderr",
-                 geometry="auto", tolerance: float = 1e-3):
+                 geometry="auto", tolerance: float = 1e-2):
         import json
         import sys
 
