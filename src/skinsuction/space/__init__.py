@@ -87,7 +87,7 @@ from ._interpolate import GriddedSpace, SpaceInterpolant, evaluate, interpolate_
 from ._lagrange import LagrangeAxis
 from ._coordinates import SpaceCoordinates, load, reference_pressure, similar_length
 from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
-from ._open import LoadedSpace, ProbeSpace, geometry_file_for, load_space
+from ._open import LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
 from ._pair_interpolate import PairRayInterpolant, interpolant
 from ._pairs import (
@@ -109,6 +109,7 @@ from ._geometry_space import (
     GeometrySpace,
     assemble_geometry_space,
     default_geometry_file,
+    geometry_file_for,
     read_geometry_space,
     same_rays,
     ship_geometry_space,

@@ -36,7 +36,8 @@ from ._storage import _read_parquet, round_sig
 
 __all__ = ["GeometryGrid", "GeometrySpace", "assemble_geometry_space",
            "read_geometry_space", "GEOMETRY_FOLDER", "same_rays",
-           "default_geometry_file", "ship_geometry_space"]
+           "default_geometry_file", "ship_geometry_space",
+           "geometry_file_for"]
 
 #: The folder of a scale-free space that holds its geometry space.
 GEOMETRY_FOLDER = "geometry"
@@ -337,6 +338,30 @@ def _read_cached(path: str, mtime_ns: int, size: int) -> GeometrySpace:
     except (KeyError, ValueError, TypeError) as err:
         raise ValueError(f"{path}: not a geometry space file ({err})") from err
     return GeometrySpace(spec, grid, m, meta.get("provenance"))
+
+
+def geometry_file_for(space_path, solve_on_demand=True):
+    """The geometry space that rays on demand read first (their ``geometry``).
+
+    Parameters
+    ----------
+    space_path : path-like
+        The scale-free space (its folder or its ``neo_hookean.parquet``).
+    solve_on_demand : bool or "always"
+        "always": every ray solved, no geometry space.
+
+    Returns
+    -------
+    Path, "auto" or None
+        The one in the space's folder (``geometry/neo_hookean.parquet``), else
+        "auto" (the default one, :func:`default_geometry_file`); None for "always".
+    """
+    if solve_on_demand == "always":
+        return None
+    space_path = Path(space_path)
+    folder = space_path if space_path.is_dir() else space_path.parent
+    own = folder / GEOMETRY_FOLDER / GEOMETRY_FILE
+    return own if own.is_file() else "auto"
 
 
 def default_geometry_file(cwd=None) -> Path | None:

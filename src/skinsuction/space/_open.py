@@ -19,6 +19,7 @@ from skinsuction.measured import Geometry
 
 from ._causes import BASELINE
 from ._geometry import GeometryOutsideSpace, spaces_at
+from ._geometry_space import geometry_file_for
 from ._grid import read_space
 from ._interpolate import GriddedSpace
 from ._on_demand import OnDemandRays
@@ -408,32 +409,6 @@ class LoadedSpace:
         """
         notes = [self.probe(p).range_note() for p in probes]
         return next((n for n in notes if "scale-free" in n), notes[0])
-
-
-def geometry_file_for(space_path, solve_on_demand=True):
-    """The geometry space that rays on demand read first (their ``geometry``).
-
-    Parameters
-    ----------
-    space_path : path-like
-        The scale-free space (its folder or its ``neo_hookean.parquet``).
-    solve_on_demand : bool or "always"
-        "always": every ray solved, no geometry space.
-
-    Returns
-    -------
-    Path, "auto" or None
-        The one in the space's folder (``geometry/neo_hookean.parquet``), else
-        "auto" (the default one, :func:`default_geometry_file`); None for "always".
-    """
-    from ._geometry_space import GEOMETRY_FILE, GEOMETRY_FOLDER
-
-    if solve_on_demand == "always":
-        return None
-    space_path = Path(space_path)
-    folder = space_path if space_path.is_dir() else space_path.parent
-    own = folder / GEOMETRY_FOLDER / GEOMETRY_FILE
-    return own if own.is_file() else "auto"
 
 
 def load_space(space_path=None, bottom: str = "fixed", *, solve_on_demand: bool | str = True,
