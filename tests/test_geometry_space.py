@@ -190,6 +190,79 @@ def test_a_geometry_space_serves_only_the_rays_it_was_solved_with(fe_spaces, tmp
     assert OnDemandRays(finer, cache_dir=tmp_path).geometry is None
 
 
+# ------------------------------------------------------------- a cause's own space
+def _pre_tension():
+    from skinsuction.space import Cause
+
+    return Cause("pre_tension", "prestretch", "lambda0", "1", False, 1.0, (1.0, 1.1, 1.2))
+
+
+@pytest.fixture(scope="module")
+def cause_space(fe_spaces, tmp_path_factory):
+    """Pre-tension's rays on the coarse grid, in a folder beside a copy of its
+    neo-Hookean space (where rays on demand look for it)."""
+    import shutil
+
+    tmp, coarse, _ = fe_spaces
+    folder = tmp_path_factory.mktemp("with_causes")
+    shutil.copyfile(tmp / "coarse_space.parquet", folder / "neo_hookean.parquet")
+    cause = _pre_tension()
+    ids = coarse.grid.ray_ids(SPEC, cause=cause)
+    compute_bundle(ids, folder / "rays.parquet", SPEC.pressures_mbar, SPEC.mesh)
+    space = assemble_geometry_space([folder / "rays.parquet"], folder / "pre_tension.parquet",
+                                    SPEC, coarse.grid, cause=cause)
+    return folder, space
+
+
+def test_a_causes_rays_are_read_off_its_own_geometry_space(cause_space, tmp_path):
+    from skinsuction.space import cause_coordinates
+
+    folder, space = cause_space
+    cause = _pre_tension()
+    assert space.cause == "pre_tension" and space.coordinates == (1.1, 1.2)
+    assert cause_coordinates(cause) == [1.1, 1.2]
+    assert read_geometry_space(folder / "pre_tension.parquet").coordinates == (1.1, 1.2)
+    exact = OnDemandRays(SPEC, cache_dir=tmp_path, geometry=None, progress=None)
+    solver = OnDemandRays(SPEC, cache_dir=tmp_path, geometry=folder / "neo_hookean.parquet",
+                          progress=None, tolerance=math.inf)
+    g = space.grid
+    # at a node: the same FE runs as rays on demand (the grid's ray ids are theirs)
+    node = _layers(2 * g.td_nodes[2], 2 * g.th_nodes[1])
+    read, info = solver.rays(4.0, node, cause)
+    assert solver.solved == 0 and info["rays_interpolated"] == 6  # 2 X1h/X1d x 3 nodes
+    solved, _ = exact.rays(4.0, node, cause)
+    assert np.allclose(read, solved, rtol=2e-7, atol=0, equal_nan=True)
+    # between nodes: the cubic's error, and an estimate of its order
+    ok = np.asarray(SPEC.pressures_mbar) > 0
+    for t_d, t_h in [(1.1, 3.0), (1.7, 1.5)]:
+        read, _ = solver.rays(2.0, _layers(t_d, t_h), cause)
+        solved, _ = exact.rays(2.0, _layers(t_d, t_h), cause)
+        for k, c in enumerate(cause.nodes[1:], start=1):
+            est = space.rays(2.0, t_d, t_h, coordinate=c)[1]["error_estimate"]
+            error = np.max(np.abs(read[:, k, ok] / solved[:, k, ok] - 1), axis=1)
+            # seen: errors 0.03-0.09 %, estimates 0.02-0.09 % (0.24x to 3.4x the error):
+            # of its order, not a bound, which is why the tolerance is 1 %
+            assert np.all(error < 2e-3), (t_d, t_h, c, error)
+            assert np.all(est >= error / 5), (t_d, t_h, c, error, est)
+    assert solver.solved == 0
+    with pytest.raises(ValueError, match="no node 1.15"):
+        space.rays(2.0, 1.1, 3.0, coordinate=1.15)
+
+
+def test_a_cause_with_other_nodes_than_its_geometry_space_is_solved(cause_space, tmp_path):
+    from skinsuction.space import Cause
+
+    folder, _ = cause_space
+    other = Cause("pre_tension", "prestretch", "lambda0", "1", False, 1.0, (1.0, 1.05))
+    solver = OnDemandRays(SPEC, cache_dir=tmp_path, geometry=folder / "neo_hookean.parquet",
+                          progress=None, tolerance=math.inf)
+    assert solver.cause_geometry(other) is None
+    _, info = solver.rays(4.0, _layers(2.4, 3.0), other)
+    assert solver.solved == 1 and info["rays_solved"] == 0 and info["rays_interpolated"] == 2
+    stiff = Cause("strain_stiffening", "x2d", "X2d", "MPa", True, 0.0, (0.0, 1.0))
+    assert solver.cause_geometry(stiff) is None  # none beside it
+
+
 # --------------------------------------------------------------- the shipped space
 @pytest.mark.skipif(default_geometry_file() is None, reason="no geometry space built or shipped")
 def test_the_default_geometry_space_is_the_fe_model_at_an_off_node_geometry(tmp_path):

@@ -17,10 +17,12 @@ config.scale_free_space.pairs -> the rays of two causes at once, both away from
   so the study reads the pairs shipped with the package unless they are built)
 
 config.scale_free_space.geometry -> the neo-Hookean rays over the subject's
-  geometry (t_d/a x t_h/a x X1h/X1d), one job per t_d/a node
-  -> results/simulated_space/scale_free/geometry/neo_hookean.parquet (target
-  scale_free_geometry; not in the default target: 5 824 FE rays, some 70 CPU-min,
-  so identify, diagnose and study read the one shipped with the package unless built)
+  geometry (t_d/a x t_h/a x X1h/X1d), and those of the causes in its `causes`
+  (on their own grid), one job per model and t_d/a node
+  -> results/simulated_space/scale_free/geometry/<model>.parquet (target
+  scale_free_geometry; not in the default target: 5 824 neo-Hookean FE rays, some 2.7
+  CPU-h, and the causes' more, so identify, diagnose and study read the ones shipped
+  with the package unless built)
 
 Developer rule, not in any target: `snakemake --cores 2 ship_scale_free_space`
 copies the built model files into src/skinsuction/data/scale_free/ with
@@ -62,15 +64,29 @@ SF_BUNDLES = {**ray_bundles(SF_SPEC, SF_CAUSES, SF.get("rays_per_job", 1)), **SF
 SF_DIR = "results/simulated_space/scale_free"
 SF_SPACES = expand(f"{SF_DIR}/{{model}}.parquet", model=SF_MODELS)
 
-SF_GEOMETRY = None
+# model -> (its cause or None, its grid) of the geometry spaces: the neo-Hookean one and
+# those of the causes named in scale_free_space.geometry.causes (their own, coarser grid)
+SF_GEOMETRY = {}
 if SF.get("geometry"):
     try:
-        SF_GEOMETRY = GeometryGrid.from_config(SF["geometry"])
+        SF_GEOMETRY[BASELINE] = (None, GeometryGrid.from_config(SF["geometry"]))
+        _gc = SF["geometry"].get("causes") or {}
+        for _name in _gc.get("names", []):
+            if _name not in SF_CAUSES or SF_CAUSES[_name].geometric:
+                raise ValueError(f"causes.names: {_name!r} is not a cause of the space other "
+                                 "than a thickness (those are neo-Hookean rays)")
+            SF_GEOMETRY[_name] = (SF_CAUSES[_name], GeometryGrid.from_config(_gc))
     except ValueError as err:
         raise _config_error("scale_free_space.geometry", err)
 SF_GEOMETRY_DIR = f"{SF_DIR}/{GEOMETRY_FOLDER}"
-SF_GEOMETRY_BUNDLES = {f"td{td:g}": td for td in (SF_GEOMETRY.td_nodes if SF_GEOMETRY else ())}
-SF_GEOMETRY_SPACE = [f"{SF_GEOMETRY_DIR}/neo_hookean.parquet"] if SF_GEOMETRY else []
+# one job per model and t_d/a node: "td0.125" (neo-Hookean), "pre_tension__td0.125"
+SF_GEOMETRY_BUNDLES = {
+    (f"{m}__" if m != BASELINE else "") + f"td{td:g}": (m, td)
+    for m, (_, grid) in SF_GEOMETRY.items()
+    for td in grid.td_nodes
+}
+SF_GEOMETRY_SPACES = {m: f"{SF_GEOMETRY_DIR}/{m}.parquet" for m in SF_GEOMETRY}
+SF_GEOMETRY_SPACE = [SF_GEOMETRY_SPACES[BASELINE]] if SF_GEOMETRY else []
 
 
 # bundle files that hold the rays of each model: its own and the neutral (neo-Hookean) ones
@@ -87,6 +103,7 @@ SF_MODEL_BUNDLES = {
 wildcard_constraints:
     bundle=BUNDLE_ID_PATTERN,
     gbundle="|".join(map(re.escape, SF_GEOMETRY_BUNDLES)) or "no_geometry",
+    gmodel="|".join(map(re.escape, SF_GEOMETRY)) or "no_geometry",
     model="|".join(map(re.escape, SF_MODELS)),
     pair="|".join(map(re.escape, SF_PAIRS)) or "no_pair",
 
@@ -127,13 +144,15 @@ rule scale_free_pairs:
 
 
 rule scale_free_geometry:
-    """Target: the neo-Hookean space over the subject's geometry (scale_free_space.geometry)."""
+    """Target: the spaces over the subject's geometry (scale_free_space.geometry): the
+    neo-Hookean one and the causes' (the file of one model is a target of its own)."""
     input:
-        SF_GEOMETRY_SPACE,
+        list(SF_GEOMETRY_SPACES.values()),
 
 
 rule simulate_geometry_bundle:
-    """The FE rays of one t_d/a node of the geometry space (every t_h/a and X1h/X1d)."""
+    """The FE rays of one model at one t_d/a node of its geometry space (every t_h/a,
+    cause node and X1h/X1d)."""
     output:
         bundle=f"{SF_GEOMETRY_DIR}/rays/{{gbundle}}.parquet",
     log:
@@ -142,7 +161,7 @@ rule simulate_geometry_bundle:
         "results/benchmarks/scale_free/geometry/{gbundle}.tsv"
     params:
         bundle=lambda w: f"geometry__{w.gbundle}",
-        rays=lambda w: SF_GEOMETRY.ray_ids(SF_SPEC, SF_GEOMETRY_BUNDLES[w.gbundle]),
+        rays=lambda w: _geometry_bundle_rays(w.gbundle),
         pressures=list(SF_SPEC.pressures_mbar),
         mesh=SF_SPEC.mesh,
         fallback=[dict(f) for f in SF_SPEC.fallback],
@@ -157,16 +176,25 @@ rule simulate_geometry_bundle:
         "../scripts/simulate_ray_bundle.py"
 
 
+def _geometry_bundle_rays(name):
+    model, td = SF_GEOMETRY_BUNDLES[name]
+    cause, grid = SF_GEOMETRY[model]
+    return grid.ray_ids(SF_SPEC, td, cause)
+
+
 rule assemble_geometry_space:
     input:
-        bundles=expand(f"{SF_GEOMETRY_DIR}/rays/{{gbundle}}.parquet", gbundle=SF_GEOMETRY_BUNDLES),
+        bundles=lambda w: [f"{SF_GEOMETRY_DIR}/rays/{b}.parquet"
+                           for b, (m, _) in SF_GEOMETRY_BUNDLES.items() if m == w.gmodel],
     output:
-        space=f"{SF_GEOMETRY_DIR}/neo_hookean.parquet",
+        space=f"{SF_GEOMETRY_DIR}/{{gmodel}}.parquet",
     log:
-        "logs/scale_free/geometry/assemble.log",
+        "logs/scale_free/geometry/assemble_{gmodel}.log",
     params:
         spec=SF_SPEC.to_dict(),
-        grid=SF_GEOMETRY.to_dict() if SF_GEOMETRY else {},
+        grid=lambda w: SF_GEOMETRY[w.gmodel][1].to_dict(),
+        cause=lambda w: None if w.gmodel == BASELINE else w.gmodel,
+        causes=SF.get("causes"),
         code=code_hash(*SPACE_CODE),
     threads: 1
     resources:
@@ -179,13 +207,13 @@ rule assemble_geometry_space:
 
 
 rule ship_geometry_space:
-    """Developer rule (no target asks for it): ship the built geometry space with the package.
+    """Developer rule (no target asks for it): ship the built geometry spaces with the package.
 
-    Copies results/simulated_space/scale_free/geometry/neo_hookean.parquet into
-    src/skinsuction/data/scale_free/geometry/ with its own PROVENANCE.json.
+    Copies results/simulated_space/scale_free/geometry/<model>.parquet into
+    src/skinsuction/data/scale_free/geometry/, recorded in its own PROVENANCE.json.
     """
     input:
-        space=SF_GEOMETRY_SPACE,
+        space=list(SF_GEOMETRY_SPACES.values()),
     log:
         "logs/scale_free/ship_geometry_space.log",
     params:

@@ -108,6 +108,8 @@ from ._geometry_space import (
     GeometryGrid,
     GeometrySpace,
     assemble_geometry_space,
+    cause_coordinates,
+    cause_geometry_space,
     default_geometry_file,
     geometry_file_for,
     read_geometry_space,
@@ -212,7 +214,7 @@ __all__ = [
     "default_cache_dir", "spaces_at", "ThicknessNuisance", "window_nodes",
     "GEOMETRY_FOLDER", "GeometryGrid", "GeometrySpace", "assemble_geometry_space",
     "default_geometry_file", "read_geometry_space", "same_rays", "ship_geometry_space",
-    "geometry_file_for",
+    "geometry_file_for", "cause_coordinates", "cause_geometry_space",
     "THICKNESS_RESOLUTION_MM", "LAYER_PATHS", "layer_thicknesses",
     "SpaceCoordinates", "load", "reference_pressure", "similar_length",
 ]

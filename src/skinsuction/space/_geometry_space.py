@@ -37,7 +37,7 @@ from ._storage import _read_parquet, round_sig
 __all__ = ["GeometryGrid", "GeometrySpace", "assemble_geometry_space",
            "read_geometry_space", "GEOMETRY_FOLDER", "same_rays",
            "default_geometry_file", "ship_geometry_space",
-           "geometry_file_for"]
+           "geometry_file_for", "cause_coordinates", "cause_geometry_space"]
 
 #: The folder of a scale-free space that holds its geometry space.
 GEOMETRY_FOLDER = "geometry"
@@ -104,19 +104,31 @@ class GeometryGrid:
         return (self.td_nodes[0] <= td_a <= self.td_nodes[-1]
                 and self.th_nodes[0] <= th_a <= self.th_nodes[-1])
 
-    def ray_ids(self, spec: RaySpec, td_a: float | None = None) -> list:
+    def ray_ids(self, spec: RaySpec, td_a: float | None = None, cause=None) -> list:
         """The FE rays of the grid (at ``a = 1 mm``), or of one ``t_d / a`` node.
 
         They are the ray ids :class:`OnDemandRays` solves at those layers, so the
-        grid's rays and the rays on demand are the same FE runs.
+        grid's rays and the rays on demand are the same FE runs.  With a ``cause``
+        (not a thickness), its rays at each of its nodes but the neutral one,
+        ordered by ``t_d``, ``t_h``, cause node, X1h/X1d.
         """
         tds = self.td_nodes if td_a is None else (round_sig(td_a, _NODE_DIGITS),)
-        return [ray_id(_ray_params(spec, 2.0, r, None, None, {"t_d": d, "t_h": h}, digits=6))
-                for d in tds for h in self.th_nodes for r in spec.ratio_nodes]
+        coords = [None] if cause is None else cause_coordinates(cause)
+        return [ray_id(_ray_params(spec, 2.0, r, cause, c, {"t_d": d, "t_h": h}, digits=6))
+                for d in tds for h in self.th_nodes for c in coords for r in spec.ratio_nodes]
+
+
+def cause_coordinates(cause) -> list:
+    """A cause's nodes but the neutral one: the rays its geometry space holds (the
+    neutral node is the neo-Hookean ray)."""
+    if cause.geometric:
+        raise ValueError(f"{cause.name}: a thickness cause's rays are neo-Hookean rays at "
+                         "other layers, read off the neo-Hookean geometry space")
+    return [float(c) for c in cause.nodes if c != cause.neutral]
 
 
 class GeometrySpace:
-    """Neo-Hookean rays over the dimensionless geometry, read by interpolation.
+    """A model's rays over the dimensionless geometry, read by interpolation.
 
     Parameters
     ----------
@@ -124,23 +136,36 @@ class GeometrySpace:
         The ray specification the grid was solved with (ratio nodes, loads,
         mesh): rays are served only to an :class:`OnDemandRays` of the same one.
     grid : GeometryGrid
-    deflection : ndarray, shape (n_td, n_th, n_r, n_p)
-        M / a at each node, X1h/X1d node and pressure of ``spec`` (NaN beyond
-        where a ray stopped); stored in single precision (6e-8 of M).
+    deflection : ndarray, shape (n_td, n_th, n_r, n_p) or (n_td, n_th, n_c, n_r, n_p)
+        M / a at each node, (cause node,) X1h/X1d node and pressure of ``spec``
+        (NaN beyond where a ray stopped); stored in single precision (6e-8 of M).
     provenance : dict, optional
+    cause : str, optional
+        The cause whose rays these are (None: the neo-Hookean model); then
+        ``deflection`` has an axis of its ``coordinates``.
+    coordinates : sequence of float, optional
+        The cause's nodes held (all but the neutral one, :func:`cause_coordinates`).
     """
 
-    def __init__(self, spec: RaySpec, grid: GeometryGrid, deflection, provenance=None):
+    def __init__(self, spec: RaySpec, grid: GeometryGrid, deflection, provenance=None,
+                 cause: str | None = None, coordinates=None):
         m = np.asarray(deflection, dtype=float)
-        shape = (len(grid.td_nodes), len(grid.th_nodes), len(spec.ratio_nodes),
-                 len(spec.pressures_mbar))
+        self.cause = cause
+        self.coordinates = (tuple(float(c) for c in coordinates) if cause is not None
+                            else (math.nan,))
+        shape = (len(grid.td_nodes), len(grid.th_nodes), len(self.coordinates),
+                 len(spec.ratio_nodes), len(spec.pressures_mbar))
+        if cause is None:
+            shape = shape[:2] + shape[3:]
         if m.shape != shape:
             raise ValueError(f"deflections of shape {m.shape}, the grid needs {shape}")
         self.spec, self.grid, self.provenance = spec, grid, dict(provenance or {})
         self.deflection = m
+        self.path = None  # the file read, if any: a cause's space lies beside it
+        m5 = m if cause is not None else m[:, :, None]
         with np.errstate(divide="ignore", invalid="ignore"):
-            self._log = np.log(np.where(m > 0, m, np.nan))
-        self._zero = np.all(m == 0, axis=(0, 1, 2))  # the load 0
+            self._log = np.log(np.where(m5 > 0, m5, np.nan))
+        self._zero = np.all(m5 == 0, axis=(0, 1, 2, 3))  # the load 0
         self._td = LagrangeAxis(np.log(grid.td_nodes))
         self._th = LagrangeAxis(np.log(grid.th_nodes))
 
@@ -149,8 +174,9 @@ class GeometrySpace:
         a = probe_mm / 2
         return self.grid.covers(t_d / a, t_h / a)
 
-    def rays(self, probe_mm: float, t_d: float, t_h: float, ratio_nodes=None):
-        """The neo-Hookean rays of one probe at the layers ``t_d``, ``t_h`` (mm).
+    def rays(self, probe_mm: float, t_d: float, t_h: float, ratio_nodes=None,
+             coordinate: float | None = None):
+        """The rays of one probe at the layers ``t_d``, ``t_h`` (mm).
 
         Parameters
         ----------
@@ -160,6 +186,8 @@ class GeometrySpace:
             Dermis and hypodermis thickness (mm).
         ratio_nodes : sequence of float, optional
             Only these X1h/X1d nodes of the specification (default all).
+        coordinate : float, optional
+            The cause's node (a cause's space only: one of :attr:`coordinates`).
 
         Returns
         -------
@@ -174,8 +202,10 @@ class GeometrySpace:
         Raises
         ------
         ValueError
-            Outside the grid, or for ratio nodes the specification does not have.
+            Outside the grid, for ratio nodes the specification does not have, or
+            for a cause node the space does not hold.
         """
+        k = self._coordinate_index(coordinate)
         a = probe_mm / 2
         td_a, th_a = t_d / a, t_h / a
         if not self.grid.covers(td_a, th_a):
@@ -186,7 +216,7 @@ class GeometrySpace:
         x, y = math.log(td_a), math.log(th_a)
         (i,), (wi,) = self._td.weights([x])
         (j,), (wj,) = self._th.weights([y])
-        log_m = self._combine(i, wi, j, wj, index)
+        log_m = self._combine(i, wi, j, wj, k, index)
         m = np.exp(log_m) * a
         m[:, self._zero] = 0.0
         # a ray is cut at its first NaN: beyond, the stencil lacks a node
@@ -194,15 +224,27 @@ class GeometrySpace:
         m[cut] = np.nan
         info = {"source": "geometry space", "rays": len(index),
                 "stopped_early": int(cut[:, -1].sum()),
-                "error_estimate": self._error_estimate(log_m, x, y, i, wi, j, wj, index)}
+                "error_estimate": self._error_estimate(log_m, x, y, i, wi, j, wj, k, index)}
         return m[:, None, :], info
 
-    def _combine(self, i, wi, j, wj, index):
-        """log M of the rays ``index`` on the 4 x 4 stencil starting at (i, j)."""
-        block = self._log[i:i + wi.size, j:j + wj.size][:, :, index]  # (4, 4, n_r, n_p)
+    def _coordinate_index(self, coordinate) -> int:
+        if self.cause is None:
+            if coordinate is not None:
+                raise ValueError("the neo-Hookean geometry space has no cause nodes")
+            return 0
+        hit = [n for n, c in enumerate(self.coordinates)
+               if coordinate is not None and math.isclose(c, coordinate, rel_tol=1e-9)]
+        if not hit:
+            raise ValueError(f"{self.cause}: no node {coordinate!r} in its geometry space "
+                             f"(it holds {list(self.coordinates)})")
+        return hit[0]
+
+    def _combine(self, i, wi, j, wj, k, index):
+        """log M of the rays ``index`` of cause node ``k`` on the 4 x 4 stencil at (i, j)."""
+        block = self._log[i:i + wi.size, j:j + wj.size, k][:, :, index]  # (4, 4, n_r, n_p)
         return np.einsum("a,b,abrp->rp", wi, wj, block)
 
-    def _error_estimate(self, log_m, x, y, i, wi, j, wj, index):
+    def _error_estimate(self, log_m, x, y, i, wi, j, wj, k, index):
         """Per ray, the largest change of log M (about the relative error) when either
         axis's stencil is shifted by one node, over the loads where both exist.
 
@@ -216,9 +258,11 @@ class GeometrySpace:
                 if not 0 <= s <= n - 4:
                     continue
                 if axis is self._td:
-                    other = self._combine(s, axis.weights_at([x], np.array([s]))[0], j, wj, index)
+                    other = self._combine(s, axis.weights_at([x], np.array([s]))[0], j, wj, k,
+                                          index)
                 else:
-                    other = self._combine(i, wi, s, axis.weights_at([y], np.array([s]))[0], index)
+                    other = self._combine(i, wi, s, axis.weights_at([y], np.array([s]))[0], k,
+                                          index)
                 d = np.abs(other - log_m)
                 d[~np.isfinite(d)] = 0.0
                 spread = np.maximum(spread, d.max(axis=1))
@@ -236,7 +280,7 @@ def _ratio_index(spec: RaySpec, ratio_nodes) -> list:
 
 
 def assemble_geometry_space(bundle_paths, out_path, spec: RaySpec, grid: GeometryGrid,
-                            provenance: dict | None = None) -> GeometrySpace:
+                            provenance: dict | None = None, cause=None) -> GeometrySpace:
     """Gather the grid's FE rays from bundle files into one geometry space file.
 
     Parameters
@@ -250,6 +294,9 @@ def assemble_geometry_space(bundle_paths, out_path, spec: RaySpec, grid: Geometr
     spec : RaySpec
     grid : GeometryGrid
     provenance : dict, optional
+    cause : Cause, optional
+        A cause's rays (at its nodes but the neutral one) instead of the
+        neo-Hookean ones.
 
     Returns
     -------
@@ -268,17 +315,23 @@ def assemble_geometry_space(bundle_paths, out_path, spec: RaySpec, grid: Geometr
     rows = pd.concat(frames, ignore_index=True).drop_duplicates(["ray_id", "pressure_mbar"])
     by_ray = {rid: g for rid, g in rows.groupby("ray_id", sort=False)}
     n_p = len(spec.pressures_mbar)
-    ids = grid.ray_ids(spec)
+    ids = grid.ray_ids(spec, cause=cause)
     missing = [rid for rid in ids if rid not in by_ray or len(by_ray[rid]) != n_p]
     if missing:
         raise ValueError(f"{len(missing)} of the geometry space's {len(ids)} rays are missing "
                          f"or incomplete, e.g. {missing[:3]}")
     m = np.stack([by_ray[rid].sort_values("pressure_mbar")["deflection_mm"].to_numpy(float)
                   for rid in ids])
-    m = m.reshape(len(grid.td_nodes), len(grid.th_nodes), len(spec.ratio_nodes), n_p)
+    coords = None if cause is None else cause_coordinates(cause)
+    shape = (len(grid.td_nodes), len(grid.th_nodes)) + (() if cause is None else (
+        len(coords),)) + (len(spec.ratio_nodes), n_p)
+    m = m.reshape(shape)
     info = [infos.get(rid, {}) for rid in ids]
     meta = {"spec": spec.to_dict(), "grid": grid.to_dict(),
-            "layout": "deflection_mm in C order over (t_d/a, t_h/a, X1h/X1d, pressure)",
+            "layout": "deflection_mm in C order over (t_d/a, t_h/a, "
+                      + ("" if cause is None else f"{cause.symbol}, ") + "X1h/X1d, pressure)",
+            "cause": None if cause is None else {"name": cause.name, "keyword": cause.keyword,
+                                                 "coordinates": coords},
             "rays": len(ids),
             # the solver's record, compact: only the rays that stopped or needed a fallback
             "stopped_early": {rid: i.get("last_converged_mbar") for rid, i in zip(ids, info)
@@ -289,7 +342,13 @@ def assemble_geometry_space(bundle_paths, out_path, spec: RaySpec, grid: Geometr
             "provenance": dict(provenance or {})}
     m = m.astype(np.float32).astype(float)  # as stored: 1e-7 of M, far below its errors
     _write_compact(m.reshape(-1), out_path, meta)
-    return GeometrySpace(spec, grid, m, meta["provenance"])
+    return GeometrySpace(spec, grid, m, meta["provenance"], *_cause_of(meta))
+
+
+def _cause_of(meta: dict) -> tuple:
+    """``(cause name, coordinates)`` of a geometry space file's metadata; Nones if neo-Hookean."""
+    cause = meta.get("cause")
+    return (None, None) if not cause else (cause["name"], cause["coordinates"])
 
 
 def _write_compact(values, path, meta: dict) -> None:
@@ -332,12 +391,39 @@ def _read_cached(path: str, mtime_ns: int, size: int) -> GeometrySpace:
     try:
         spec = RaySpec(**meta["spec"])
         grid = GeometryGrid.from_config(meta["grid"])
-        n = (len(grid.td_nodes), len(grid.th_nodes), len(spec.ratio_nodes),
-             len(spec.pressures_mbar))
+        cause, coords = _cause_of(meta)
+        n = (len(grid.td_nodes), len(grid.th_nodes)) + (() if cause is None else (
+            len(coords),)) + (len(spec.ratio_nodes), len(spec.pressures_mbar))
         m = frame["deflection_mm"].to_numpy(float).reshape(n)
+        space = GeometrySpace(spec, grid, m, meta.get("provenance"), cause, coords)
     except (KeyError, ValueError, TypeError) as err:
         raise ValueError(f"{path}: not a geometry space file ({err})") from err
-    return GeometrySpace(spec, grid, m, meta.get("provenance"))
+    space.path = Path(path)
+    return space
+
+
+def cause_geometry_space(beside: GeometrySpace | None, cause, spec: RaySpec):
+    """A cause's geometry space lying beside the neo-Hookean one (``<cause>.parquet`` in
+    its folder), if it was solved with the same rays and the cause's nodes; else None.
+
+    Parameters
+    ----------
+    beside : GeometrySpace or None
+        The neo-Hookean geometry space, as read from its file.
+    cause : Cause
+    spec : RaySpec
+        The specification the rays are asked for.
+    """
+    if beside is None or beside.path is None or cause.geometric:
+        return None
+    path = beside.path.parent / f"{cause.name}.parquet"
+    if not path.is_file():
+        return None
+    space = read_geometry_space(path)
+    if (space.cause != cause.name or not same_rays(space.spec, spec)
+            or not np.allclose(space.coordinates, cause_coordinates(cause), rtol=1e-9)):
+        return None
+    return space
 
 
 def geometry_file_for(space_path, solve_on_demand=True):
@@ -384,14 +470,16 @@ def default_geometry_file(cwd=None) -> Path | None:
 
 def ship_geometry_space(built_file, dest=None, *, build_command: str | None = None,
                         repo=None) -> dict:
-    """Copy a built geometry space into the package (``<dest>/geometry/``), with its
-    ``PROVENANCE.json``: the file's SHA-256 and size, the grid, the ray specification,
-    the rays stopped early and the CPU they took, and the commit shipped from.
+    """Copy a built geometry space into the package (``<dest>/geometry/``) and record it
+    in that folder's ``PROVENANCE.json``: the file's SHA-256 and size, the grid, the ray
+    specification, the rays stopped early and the CPU they took, and the commit
+    shipped from.  The records of the folder's other files (the neo-Hookean space, the
+    causes') are kept.
 
     Parameters
     ----------
     built_file : path-like
-        ``results/simulated_space/scale_free/geometry/neo_hookean.parquet``.
+        ``results/simulated_space/scale_free/geometry/<model>.parquet``.
     dest : path-like, optional
         The shipped space's folder (default: the package's).
     build_command : str, optional
@@ -402,7 +490,7 @@ def ship_geometry_space(built_file, dest=None, *, build_command: str | None = No
     Returns
     -------
     dict
-        The provenance record written.
+        The provenance record written (the whole folder's).
     """
     import datetime as _dt
     import json
@@ -412,30 +500,35 @@ def ship_geometry_space(built_file, dest=None, *, build_command: str | None = No
     from skinsuction._files import atomic_output, file_sha256
     from skinsuction.provenance import git_info, jsonable
 
-    from ._shipped import PROVENANCE_FILE, SHIPPED_SPACE_DIR
+    from ._shipped import PROVENANCE_FILE, SHIPPED_SPACE_DIR, shipped_provenance
 
     out = Path(dest or SHIPPED_SPACE_DIR) / GEOMETRY_FOLDER
+    name = Path(built_file).name
     space = read_geometry_space(built_file)
     _, meta = _read_parquet(built_file)
     out.mkdir(parents=True, exist_ok=True)
-    with atomic_output(out / GEOMETRY_FILE) as tmp:
+    with atomic_output(out / name) as tmp:
         shutil.copyfile(built_file, tmp)
     git = git_info(repo)
-    record = jsonable({
-        "what": "the neo-Hookean rays of skinsuction's default space over the subject's "
-                "geometry (t_d/a, t_h/a at a = 1 mm): identify, diagnose and study read a "
-                "subject's rays off it instead of solving them",
-        "skinsuction_version": __version__,
+    record = (shipped_provenance(out) if (out / PROVENANCE_FILE).is_file() else None) or {}
+    files = dict(record.get("files") or {})
+    files[name] = jsonable({
+        "model": space.cause or "neo_hookean",
+        "sha256": file_sha256(out / name), "bytes": (out / name).stat().st_size,
         "shipped_from_commit": git.get("commit"), "shipped_from_dirty": git.get("dirty"),
         "shipped_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "build_command": build_command,
-        "built": space.provenance,
+        "build_command": build_command, "built": space.provenance,
         "ray_spec": space.spec.to_dict(), "grid": space.grid.to_dict(),
+        "coordinates": None if space.cause is None else list(space.coordinates),
         "rays": meta.get("rays"), "stopped_early": len(meta.get("stopped_early") or {}),
         "mesh_fallback": len(meta.get("mesh_fallback") or {}), "cpu_s": meta.get("cpu_s"),
-        "files": {GEOMETRY_FILE: {"sha256": file_sha256(out / GEOMETRY_FILE),
-                                  "bytes": (out / GEOMETRY_FILE).stat().st_size}},
     })
+    record = {
+        "what": "rays of skinsuction's default space over the subject's geometry (t_d/a, "
+                "t_h/a at a = 1 mm), the neo-Hookean model's and the causes': identify, "
+                "diagnose and study read a subject's rays off them instead of solving them",
+        "skinsuction_version": __version__, "files": dict(sorted(files.items())),
+    }
     with atomic_output(out / PROVENANCE_FILE) as tmp:
         tmp.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     return record

@@ -137,16 +137,21 @@ class OnDemandRays:
         interpolation over the geometry (:class:`GeometrySpace`), before any is
         solved.  "auto" (default): the workflow's build in the working directory,
         else the one shipped with the package, if it was solved with the same rays
-        as ``spec`` (:func:`same_rays`).  None: every ray is solved.
+        as ``spec`` (:func:`same_rays`).  None: every ray is solved.  The other
+        causes' rays are read off their own geometry spaces where these lie beside
+        it (``<cause>.parquet``, :func:`cause_geometry_space`) or are given in
+        ``cause_geometry``.
     tolerance : float
         A ray read off the geometry space whose error estimate (the spread of log
         M over shifted stencils, :meth:`GeometrySpace.rays`) exceeds this is solved
         instead: the grid is exact at its nodes and smooth between them except
         where a soft hypodermis lets a thin dermis bulge towards its limit load.
+    cause_geometry : dict name -> GeometrySpace, optional
+        A cause's geometry space, in place of the one beside ``geometry``'s file.
     """
 
     def __init__(self, spec, cache_dir=None, workers: int = 1, progress="stderr",
-                 geometry="auto", tolerance: float = 1e-2):
+                 geometry="auto", tolerance: float = 1e-2, cause_geometry=None):
         import json
         import sys
 
@@ -160,6 +165,7 @@ class OnDemandRays:
         self.geometry = _geometry_space(geometry, spec)
         self.interpolated = 0  # ray sets read off the geometry space
         self.tolerance = float(tolerance)
+        self._cause_spaces = dict(cause_geometry or {}) if self.geometry is not None else {}
 
     def _ray_ids(self, probe_mm, layers, cause=None, coordinate=None, ratio_nodes=None):
         """The ids of the rays at ``layers`` (by path), one per X1h/X1d node."""
@@ -222,17 +228,30 @@ class OnDemandRays:
     def _from_geometry(self, ref, a, cause, c, nodes):
         """The rays at ``ref`` (scaled by ``a``) read off the geometry space, and the
         nodes whose error estimate exceeds the tolerance (to be solved); None where
-        the space does not hold them (a cause other than a thickness, outside its grid)."""
-        if self.geometry is None or (cause is not None and not cause.geometric):
+        the spaces do not hold them (no space of that cause, outside its grid)."""
+        if self.geometry is None:
             return None
-        layers = _keywords(ref)
-        if cause is not None:
+        layers, space, coordinate = _keywords(ref), self.geometry, None
+        if cause is not None and cause.geometric:
             layers[cause.keyword] = round_sig(similar_length(c, 2 * a), 6)
-        if not self.geometry.grid.covers(layers["t_d"], layers["t_h"]):
+        elif cause is not None:
+            space, coordinate = self.cause_geometry(cause), c
+            if space is None:
+                return None
+        if not space.grid.covers(layers["t_d"], layers["t_h"]):
             return None
-        m, info = self.geometry.rays(2.0, layers["t_d"], layers["t_h"], nodes)
+        m, info = space.rays(2.0, layers["t_d"], layers["t_h"], nodes, coordinate)
         self.interpolated += 1
         return m * a, info
+
+    def cause_geometry(self, cause):
+        """The geometry space of a cause (not a thickness), or None where there is none."""
+        if cause.name not in self._cause_spaces:
+            from ._geometry_space import cause_geometry_space
+
+            self._cause_spaces[cause.name] = cause_geometry_space(self.geometry, cause,
+                                                                  self.spec)
+        return self._cause_spaces[cause.name]
 
     def _read(self, ref, a, cause, c, nodes):
         """The rays at the reference layers ``ref`` (2 mm aperture) scaled by ``a``: read
