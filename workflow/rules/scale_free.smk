@@ -81,8 +81,8 @@ if SF.get("geometry"):
 SF_GEOMETRY_DIR = f"{SF_DIR}/{GEOMETRY_FOLDER}"
 # one job per model and t_d/a node: "td0.125" (neo-Hookean), "pre_tension__td0.125"
 SF_GEOMETRY_BUNDLES = {
-    (f"{m}__" if m != BASELINE else "") + f"td{td:g}": (m, td)
-    for m, (_, grid) in SF_GEOMETRY.items()
+    (f"{m}__" if m != BASELINE else "") + f"td{td:g}": (m, td, cause, grid)
+    for m, (cause, grid) in SF_GEOMETRY.items()
     for td in grid.td_nodes
 }
 SF_GEOMETRY_SPACES = {m: f"{SF_GEOMETRY_DIR}/{m}.parquet" for m in SF_GEOMETRY}
@@ -161,7 +161,9 @@ rule simulate_geometry_bundle:
         "results/benchmarks/scale_free/geometry/{gbundle}.tsv"
     params:
         bundle=lambda w: f"geometry__{w.gbundle}",
-        rays=lambda w: _geometry_bundle_rays(w.gbundle),
+        rays=lambda w: (lambda m, td, cause, grid: grid.ray_ids(SF_SPEC, td, cause))(
+            *SF_GEOMETRY_BUNDLES[w.gbundle]
+        ),
         pressures=list(SF_SPEC.pressures_mbar),
         mesh=SF_SPEC.mesh,
         fallback=[dict(f) for f in SF_SPEC.fallback],
@@ -176,16 +178,10 @@ rule simulate_geometry_bundle:
         "../scripts/simulate_ray_bundle.py"
 
 
-def _geometry_bundle_rays(name):
-    model, td = SF_GEOMETRY_BUNDLES[name]
-    cause, grid = SF_GEOMETRY[model]
-    return grid.ray_ids(SF_SPEC, td, cause)
-
-
 rule assemble_geometry_space:
     input:
         bundles=lambda w: [f"{SF_GEOMETRY_DIR}/rays/{b}.parquet"
-                           for b, (m, _) in SF_GEOMETRY_BUNDLES.items() if m == w.gmodel],
+                           for b, (m, *_) in SF_GEOMETRY_BUNDLES.items() if m == w.gmodel],
     output:
         space=f"{SF_GEOMETRY_DIR}/{{gmodel}}.parquet",
     log:
