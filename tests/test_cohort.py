@@ -150,3 +150,28 @@ def test_unpaired_groups_are_compared_by_mann_whitney():
     (row,) = rows
     assert row["test"].startswith("Mann-Whitney") and row["p_value"] < 0.01
     assert 30 < row["median_change_percent"] < 70 and row["effect_size"] > 0.8
+    # its bootstrap interval holds the estimate and, at 12 per group, the truth (+50 %)
+    assert row["ci_low_percent"] < row["median_change_percent"] < row["ci_high_percent"]
+    assert row["ci_low_percent"] < 50 < row["ci_high_percent"]
+
+
+def test_ramps_and_time_curves_are_compared_apart():
+    """One subject's ramp and mode-1 curve are not independent, and a time curve's X1d is
+    a long-time modulus: a mixed study is compared protocol by protocol."""
+    rng = np.random.default_rng(1)
+    n = 12
+    x1d = np.r_[np.exp(rng.normal(np.log(0.03), 0.1, n)), np.exp(rng.normal(np.log(0.02), 0.1, n))]
+    groups = ["treated"] * n + ["control"] * n
+    ramp = pd.DataFrame({"group": groups, "x1d_mpa": x1d, "protocol": None})
+    # the time curves' long-time X1d: no group difference at all, another scale
+    time = pd.DataFrame({"group": groups, "x1d_mpa": 0.01 * np.exp(rng.normal(0, 0.1, 2 * n)),
+                         "protocol": "mode 1"})
+    rows, notes = compare_groups(pd.concat([ramp, time], ignore_index=True))
+    assert "compared apart" in notes[0]
+    by = {r["protocol"]: r for r in rows}
+    assert set(by) == {"ramp", "mode 1"} and all(r["n"] == 2 * n for r in rows)
+    assert by["ramp"]["p_value"] < 0.01 and by["ramp"]["median_change_percent"] > 30
+    assert by["mode 1"]["p_value"] > 0.01
+    # one protocol only: as before, no protocol column in the rows
+    rows, _ = compare_groups(ramp)
+    assert "protocol" not in rows[0]

@@ -52,8 +52,27 @@ def compare_groups(df, parameter: str = "x1d_mpa", *, reference=None, seed: int 
     Returns ``(rows, notes)``: one dict per test with ``group``, ``test``,
     ``n``, ``median_change_percent`` (or medians), its bootstrap interval,
     ``statistic``, ``p_value``, ``effect_size`` (rank-biserial), and text notes
-    (excluded measurements, the design used).
+    (excluded measurements, the design used).  A study that mixes ramps and time
+    curves (a ``protocol`` column: "mode 1", "mode 2", empty for a ramp) is
+    compared protocol by protocol, each row saying which: a time curve's X1d is
+    a long-time modulus and a ramp's a quasi-static one, and one subject's two
+    measurements are not independent.
     """
+    if "protocol" not in df.columns:
+        return _compare(df, parameter, reference=reference, seed=seed)
+    kind = df["protocol"].fillna("ramp").astype(str).replace("", "ramp")
+    if kind.nunique() < 2:
+        return _compare(df, parameter, reference=reference, seed=seed)
+    rows, notes = [], [f"ramps and time curves compared apart ({', '.join(sorted(kind.unique()))})"]
+    for k in sorted(kind.unique()):
+        r, n = _compare(df[kind == k], parameter, reference=reference, seed=seed)
+        rows += [{"protocol": k, **row} for row in r]
+        notes += [f"{k}: {note}" for note in n]
+    return rows, notes
+
+
+def _compare(df, parameter: str, *, reference=None, seed: int = 0):
+    """:func:`compare_groups` of measurements of one protocol."""
     from scipy import stats
 
     rng = np.random.default_rng(seed)
@@ -125,19 +144,34 @@ def compare_groups(df, parameter: str = "x1d_mpa", *, reference=None, seed: int 
                          "effect_size_name": "rank-biserial"})
     else:
         notes.append(f"unpaired design: log {parameter} compared between groups")
-        base = ok[ok[group_col].astype(str) == ref]["log_value"].to_numpy()
-        for g in groups:
-            if g == ref:
-                continue
-            x = ok[ok[group_col].astype(str) == g]["log_value"].to_numpy()
-            if x.size < 2 or base.size < 2:
-                continue
-            u = stats.mannwhitneyu(x, base, alternative="two-sided")
-            rows.append({"group": f"{g} vs {ref}", "comparison": parameter,
-                         "test": "Mann-Whitney U (two-sided)", "n": int(x.size + base.size),
-                         "median_change_percent": 100 * (math.exp(np.median(x)
-                                                                  - np.median(base)) - 1),
-                         "statistic": float(u.statistic), "p_value": float(u.pvalue),
-                         "effect_size": _rank_biserial(u.statistic, x.size, base.size),
-                         "effect_size_name": "rank-biserial"})
+        rows += _unpaired(ok, groups, ref, group_col, parameter, rng)
     return rows, notes
+
+
+def _unpaired(ok, groups, ref, group_col, parameter, rng) -> list:
+    """Mann-Whitney U on log ``parameter`` of each group against ``ref``, with the
+    difference of the medians and its seeded bootstrap 95 % interval."""
+    from scipy import stats
+
+    rows = []
+    base = ok[ok[group_col].astype(str) == ref]["log_value"].to_numpy()
+    for g in groups:
+        if g == ref:
+            continue
+        x = ok[ok[group_col].astype(str) == g]["log_value"].to_numpy()
+        if x.size < 2 or base.size < 2:
+            continue
+        u = stats.mannwhitneyu(x, base, alternative="two-sided")
+        boot = [np.median(rng.choice(x, x.size)) - np.median(rng.choice(base, base.size))
+                for _ in range(4000)]
+        lo, hi = np.percentile(boot, [2.5, 97.5])
+        rows.append({"group": f"{g} vs {ref}", "comparison": parameter,
+                     "test": "Mann-Whitney U (two-sided)", "n": int(x.size + base.size),
+                     "median_change_percent": 100 * (math.exp(np.median(x)
+                                                              - np.median(base)) - 1),
+                     "ci_low_percent": 100 * (math.exp(lo) - 1),
+                     "ci_high_percent": 100 * (math.exp(hi) - 1),
+                     "statistic": float(u.statistic), "p_value": float(u.pvalue),
+                     "effect_size": _rank_biserial(u.statistic, x.size, base.size),
+                     "effect_size_name": "rank-biserial"})
+    return rows

@@ -150,7 +150,9 @@ def summary_markdown(df, id_cols, comparison, notes, meta) -> str:
     if "group" in df.columns:
         lines += _group_lines(df)
     lines += ["## Group comparison", "", *[f"- {t}" for t in notes], "",
-              markdown_table(comparison, COMPARISON_COLUMNS, digits=3, align=False), "",
+              markdown_table(comparison, (("protocol",) if any("protocol" in r for r in
+                                                              comparison) else ())
+                             + COMPARISON_COLUMNS, digits=3, align=False), "",
               "median_change_percent: median change of X1d in % (between groups: difference "
               "of the median changes); ci: bootstrap 95 % interval; effect size: rank-biserial "
               "correlation.", ""]

@@ -17,6 +17,9 @@ is known, and neither of them imports it (tests/test_layers.py):
   (:func:`least_squares_from_random_starts`, :func:`differential_evolution_fit`);
 * which skins reach the published Cutometer values of the face, creep alone or
   creep with stiffening (:func:`published_ranges_study`);
+* a synthetic clinical study of subjects with their own layers, ramps and mode-1
+  curves, and its check against the truth (:func:`make_layers_study`,
+  :func:`layers_study_check`);
 * the shipped synthetic example, remade with ``python -m skinsuction.evaluation.example``
   (:mod:`skinsuction.evaluation.example`, not imported here).
 
@@ -80,6 +83,13 @@ from ._published import (
     published_ranges_summary,
 )
 from ._rates import UNDIAGNOSED, attribution_ceiling, summarise, under_rule
+from ._layers_study import (
+    LayersStudyDesign,
+    draw_layers_subject,
+    layers_study_check,
+    layers_study_markdown,
+    make_layers_study,
+)
 from ._time_virtual import (
     mode1_suction,
     mode2_suction,
@@ -101,6 +111,9 @@ __all__ = [
     "VirtualExperiment", "virtual_experiment", "draw_experiment", "write_csv",
     "DRAW_RANGES", "DETECTABLE_EFFECTS",
     "mode1_suction", "mode2_suction", "virtual_curve", "virtual_skin_curve", "write_time_csv",
+    # a synthetic study of subjects with their own layers
+    "LayersStudyDesign", "draw_layers_subject", "make_layers_study", "layers_study_check",
+    "layers_study_markdown",
     # the published Cutometer values: creep alone, or with stiffening
     "PUBLISHED_FACE", "FACE_PROTOCOL", "box_distance", "evaluate_draw", "closest_skin",
     "published_ranges_study", "published_ranges_summary", "published_ranges_markdown",
