@@ -1,0 +1,135 @@
+"""A cause's rays read off its geometry space, against the same rays solved by FE.
+
+    python benchmarks/cause_geometry_accuracy.py --cause strain_stiffening
+        [--geometries 24] [--ratios 3] [--seed 0] [--workers 2] [--cache DIR]
+        [--tolerance 0.01]
+
+Draws random geometries (aperture uniform in 2-8 mm, t_d uniform in 0.5-2.5 mm,
+t_h log-uniform in 0.5-10 mm) and, at each, random X1h/X1d nodes; reads the cause's
+rays there at every node of the cause (skinsuction.space.OnDemandRays, the default
+geometry spaces) and solves the same rays directly (geometry=None, a cache of their
+own). Prints the relative error of M per ray over its loads (where both exist):
+percentiles overall, per aperture band and per cause node, for the rays read (the
+default tolerance) and for the grid alone (every ray read whatever its error
+estimate), with the rays that fell back to FE, and the CPU of both ways. Asserts
+nothing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pandas as pd
+
+_CTX = {}
+
+
+def _init(cause_name, cache, tolerance):
+    from skinsuction.space import BASELINE, OnDemandRays, read_ray_spaces
+    from skinsuction.space._shipped import default_space_dir
+
+    spaces = read_ray_spaces(default_space_dir())
+    spec = spaces[BASELINE].spec
+    _CTX.update(cause=spaces[cause_name].cause,
+                read=OnDemandRays(spec, cache_dir=cache, progress=None, tolerance=tolerance),
+                raw=OnDemandRays(spec, cache_dir=cache, progress=None, tolerance=math.inf),
+                solved=OnDemandRays(spec, cache_dir=cache, geometry=None, progress=None))
+    if _CTX["read"].cause_geometry(_CTX["cause"]) is None:
+        raise SystemExit(f"no geometry space of {cause_name} beside the neo-Hookean one")
+
+
+def _run(job):
+    probe, t_d, t_h, nodes = job
+    layers = {"dermis.thickness": t_d, "hypodermis.thickness": t_h}
+    cause = _CTX["cause"]
+    t0 = time.process_time()
+    read, info = _CTX["read"].rays(probe, layers, cause, ratio_nodes=nodes)
+    read_cpu = time.process_time() - t0
+    raw, _ = _CTX["raw"].rays(probe, layers, cause, ratio_nodes=nodes)
+    t0 = time.process_time()
+    solved, _ = _CTX["solved"].rays(probe, layers, cause, ratio_nodes=nodes)
+    solved_cpu = time.process_time() - t0
+    out = []
+    for k, r in enumerate(nodes):
+        for j, c in enumerate(cause.nodes):
+            if c == cause.neutral:
+                continue
+            ok = np.isfinite(read[k, j]) & np.isfinite(solved[k, j]) & (solved[k, j] > 0)
+            n_fe = int(np.isfinite(solved[k, j]).sum())
+            e = np.abs(read[k, j, ok] / solved[k, j, ok] - 1)
+            okr = np.isfinite(raw[k, j]) & np.isfinite(solved[k, j]) & (solved[k, j] > 0)
+            er = np.abs(raw[k, j, okr] / solved[k, j, okr] - 1)
+            out.append({"probe_mm": probe, "t_d": t_d, "t_h": t_h, "ratio": r, "node": c,
+                        "max_error": float(e.max()) if e.size else math.nan,
+                        "raw_max_error": float(er.max()) if er.size else math.nan,
+                        "loads_read": int(ok.sum()), "loads_fe": n_fe,
+                        "rays_solved": info.get("rays_solved", 0),
+                        "read_cpu_s": read_cpu, "solved_cpu_s": solved_cpu})
+    return out
+
+
+def _band(probe):
+    for lo, hi in ((2, 3), (3, 5), (5, 7), (7, 8.01)):
+        if lo <= probe < hi:
+            return f"{lo}-{int(hi)} mm"
+    return "?"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--cause", default="strain_stiffening")
+    ap.add_argument("--geometries", type=int, default=24)
+    ap.add_argument("--ratios", type=int, default=3)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--cache", default="benchmarks/out/cause_geometry_cache")
+    ap.add_argument("--tolerance", type=float, default=1e-2)
+    ap.add_argument("--out", default="benchmarks/out/cause_geometry_accuracy.csv")
+    a = ap.parse_args(argv)
+    from skinsuction.space import BASELINE, read_ray_spaces
+    from skinsuction.space._shipped import default_space_dir
+
+    nodes = read_ray_spaces(default_space_dir())[BASELINE].spec.ratio_nodes
+    rng = np.random.default_rng(a.seed)
+    jobs = []
+    for _ in range(a.geometries):
+        probe = float(rng.uniform(2, 8))
+        t_d, t_h = float(rng.uniform(0.5, 2.5)), float(np.exp(rng.uniform(np.log(0.5),
+                                                                          np.log(10))))
+        pick = sorted(rng.choice(len(nodes), a.ratios, replace=False))
+        jobs.append((round(probe, 3), round(t_d, 2), round(t_h, 2),
+                     tuple(nodes[i] for i in pick)))
+    w0 = time.time()
+    with ProcessPoolExecutor(a.workers, initializer=_init,
+                             initargs=(a.cause, a.cache, a.tolerance)) as pool:
+        rows = [r for out in pool.map(_run, jobs) for r in out]
+    df = pd.DataFrame(rows)
+    df.to_csv(a.out, index=False)
+    df["band"] = df["probe_mm"].map(_band)
+    print(f"{a.cause}: {len(jobs)} geometries, {len(df)} rays, {time.time() - w0:.0f} s wall")
+
+    def pct(x):
+        x = x.dropna()
+        return (f"{100 * np.percentile(x, 50):.3f} / {100 * np.percentile(x, 95):.3f} / "
+                f"{100 * x.max():.3f} %")
+    print("max relative error of M along a ray: median / 95th pct / max")
+    print(f"  all       read {pct(df['max_error'])}   grid alone {pct(df['raw_max_error'])}")
+    for band, g in df.groupby("band"):
+        print(f"  {band:8s}  read {pct(g['max_error'])}   grid alone {pct(g['raw_max_error'])}"
+              f"   ({len(g)} rays)")
+    for node, g in df.groupby("node"):
+        print(f"  node {node:g}: read {pct(g['max_error'])}")
+    per_geom = df.drop_duplicates(["probe_mm", "t_d", "t_h"])
+    print(f"rays solved at the tolerance {a.tolerance:g}: {int(per_geom['rays_solved'].sum())} of "
+          f"{len(df)}; loads read {int(df['loads_read'].sum())} of {int(df['loads_fe'].sum())} "
+          "solved by FE")
+    print(f"CPU per geometry (median): read {per_geom['read_cpu_s'].median():.3f} s, "
+          f"solved {per_geom['solved_cpu_s'].median():.1f} s")
+
+
+if __name__ == "__main__":
+    main()
