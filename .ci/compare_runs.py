@@ -13,9 +13,10 @@ understood, told apart by their columns:
 * a scale-free space (skinsuction.space.assemble_ray_space): one ray
   per (probe_mm, ratio, coordinate); the rays and their `converged` flags (the
   per-ray solver record in the file's metadata) must be equal;
-* a geometry space (skinsuction.space.assemble_geometry_space): one column of
-  deflections over the grid in the metadata; the grid, the ray specification and
-  the rays that stopped early must be equal.
+* a geometry space (skinsuction.space.assemble_geometry_space), the neo-Hookean
+  one or a cause's: one column of deflections over the grid in the metadata; the
+  grid, the ray specification, the cause and its nodes, and the rays that stopped
+  early must be equal.
 
 In both, the pressures must be the same and every deflection equal within
 ``rtol`` relative (|a - b| <= rtol * max(|a|, |b|)), NaN (beyond the last
@@ -129,7 +130,7 @@ def compare_rays(fa, fb, meta_a, meta_b, rtol):
 
 def compare_geometry(fa, fb, meta_a, meta_b, rtol):
     problems = []
-    for key in ("grid", "spec", "stopped_early"):
+    for key in ("grid", "spec", "cause", "stopped_early"):
         if meta_a.get(key) != meta_b.get(key):
             problems.append(f"{key} differs")
     if len(fa) != len(fb):

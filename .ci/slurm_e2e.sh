@@ -29,10 +29,10 @@
 #                                                  simulate_ray_bundle (grouped) + assemble_scale_free_space
 #                                                  (X1h/X1d cut to 0.001 and 0.1: 4 bundles; the
 #                                                  6 mm ray at 0.001 stops early, so a NaN tail is compared)
-#   results/simulated_space/scale_free/geometry/neo_hookean.parquet
-#                                                  simulate_geometry_bundle (grouped) + assemble_geometry_space
-#                                                  (a 5 x 5 grid of t_d/a, t_h/a: 5 jobs of 10 rays,
-#                                                  one SLURM job)
+#   results/simulated_space/scale_free/geometry/neo_hookean.parquet and
+#   .../geometry/strain_stiffening.parquet         simulate_geometry_bundle (grouped) + assemble_geometry_space
+#                                                  (a 5 x 5 grid of t_d/a, t_h/a: 5 neo-Hookean jobs of
+#                                                  10 rays and 5 stiffening jobs of 30, two SLURM jobs)
 #   results/figures/fig4_single_probe.png          simulate_test_curve, identification_test_curves,
 #                                                  identification_runs (one identification study) and
 #                                                  one figure (test point moved inside the cut space)
@@ -240,16 +240,22 @@ scale_free_space:
   geometry:                             # 5 x 5 nodes x 2 X1h/X1d = 50 rays in 5 jobs
     t_d_over_a: [0.3, 0.45, 0.7, 1.0, 1.5]
     t_h_over_a: [0.5, 1.0, 2.0, 4.0, 8.0]
+    causes:                             # x 3 stiffening nodes (ci.yaml): 150 rays in 5 jobs
+      names: [strain_stiffening]
+      t_d_over_a: [0.3, 0.45, 0.7, 1.0, 1.5]
+      t_h_over_a: [0.5, 1.0, 2.0, 4.0, 8.0]
 EOF
 CONFIG_ARGS=(--configfile config/ci.yaml "$OVERLAY")  # ci.yaml: whole_config
 TARGETS=(
     results/simulated_space/paper.parquet
     results/simulated_space/scale_free/neo_hookean.parquet
     results/simulated_space/scale_free/geometry/neo_hookean.parquet
+    results/simulated_space/scale_free/geometry/strain_stiffening.parquet
     results/figures/fig4_single_probe.png
 )
 DATABASES=(results/simulated_space/paper.parquet results/simulated_space/scale_free/neo_hookean.parquet
-           results/simulated_space/scale_free/geometry/neo_hookean.parquet)
+           results/simulated_space/scale_free/geometry/neo_hookean.parquet
+           results/simulated_space/scale_free/geometry/strain_stiffening.parquet)
 
 # --------------------------------------------------------------- local run
 # in the background, beside the SLURM run (which leaves cores idle while it

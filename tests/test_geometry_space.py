@@ -291,26 +291,38 @@ def test_the_default_geometry_space_is_the_fe_model_at_an_off_node_geometry(tmp_
         assert np.median(error) < 1e-3
 
 
-@pytest.mark.skipif(default_geometry_file() is None, reason="no geometry space built or shipped")
-def test_two_seeded_random_rays_of_the_default_geometry_space_are_todays_fe_model():
-    """A change of the FE code must be shipped again: two of its rays, re-solved."""
+def _default_geometry_files():
+    path = default_geometry_file()
+    return [] if path is None else sorted(path.parent.glob("*.parquet"))
+
+
+@pytest.mark.parametrize("path", _default_geometry_files(), ids=lambda p: p.stem)
+def test_two_seeded_random_rays_of_each_default_geometry_space_are_todays_fe_model(path):
+    """A change of the FE code must be shipped again: two rays of each file, re-solved."""
     from skinsuction.space import compute_ray
+    from skinsuction.space._shipped import default_space_dir
     from skinsuction.space._storage import _read_parquet
 
-    path = default_geometry_file()
     space = read_geometry_space(path)
     stopped = _read_parquet(path)[1]["stopped_early"]
     grid, spec = space.grid, space.spec
+    cause = None
+    if space.cause is not None:
+        from skinsuction.space import read_ray_spaces
+
+        cause = read_ray_spaces(default_space_dir())[space.cause].cause
     rng = np.random.default_rng(27)
-    ids = grid.ray_ids(spec)
+    ids = grid.ray_ids(spec, cause=cause)
+    shape = space.deflection.shape[:-1]
     for k in rng.choice(len(ids), size=2, replace=False):
-        i, j, r = np.unravel_index(k, space.deflection.shape[:3])
+        index = np.unravel_index(k, shape)
+        i, j = index[:2]
         assert f"td{grid.td_nodes[i]:g}_th{grid.th_nodes[j]:g}" in ids[k]
         curve, _, info = compute_ray(ids[k], spec.pressures_mbar, spec.mesh, list(spec.fallback))
         fresh = np.asarray(curve.deflection_mm, float)
         if not info["converged"]:
             fresh[~(np.asarray(spec.pressures_mbar) <= info["last_converged_mbar"])] = np.nan
-        stored = space.deflection[i, j, r]
+        stored = space.deflection[index]
         assert (ids[k] in stopped) == (not info["converged"])
         assert np.array_equal(np.isnan(fresh), np.isnan(stored)), ids[k]
         ok = np.isfinite(fresh)
