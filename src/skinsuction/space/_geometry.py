@@ -420,16 +420,21 @@ def _nuisances(center, probes, geometry, layers, on_demand, notes, full_nodes=()
                          "demand, which is not allowed")
             continue
         value = layers[AXIS_PATHS[key]]
-        brackets = []
+        brackets, total = [], {"rays_interpolated": 0, "rays_solved": 0}
         for t in (value - sd, value + sd):
             t = max(_round_mm(t), THICKNESS_RESOLUTION_MM)
             other = {**layers, AXIS_PATHS[key]: t}
-            rays = {p: on_demand.rays(p, other, cause, **_subset(center.spec.ratio_nodes,
-                                                                  full_nodes))[0]
-                    for p in probes}
+            rays = {}
+            for p in probes:
+                rays[p], info = on_demand.rays(p, other, cause,
+                                               **_subset(center.spec.ratio_nodes, full_nodes))
+                if not info.get("rays_interpolated", 0):  # solved whole, or read from the cache
+                    info = {**info, "rays_solved": info.get("rays", 0)}
+                for k in total:
+                    total[k] += info.get(k, 0)
             brackets.append(RaySpace(cause, center.spec, coordinates, rays,
                                      {**center.metadata, key: t}))
         out.append(ThicknessNuisance(key, value, float(sd), center, *brackets))
         notes.append(f"the given {key} = {value:g} ± {sd:g} mm is a nuisance parameter of every "
-                     "fit (Gaussian prior; neo-Hookean rays at ±1 sd solved on demand)")
+                     f"fit (Gaussian prior; neo-Hookean rays at ±1 sd {_source(total)})")
     return tuple(out)
