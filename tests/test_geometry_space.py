@@ -249,6 +249,15 @@ def test_a_causes_rays_are_read_off_its_own_geometry_space(cause_space, tmp_path
         space.rays(2.0, 1.1, 3.0, coordinate=1.15)
 
 
+def test_a_jobs_share_of_the_grid_is_its_t_h_nodes_and_the_shares_make_the_whole():
+    grid = GeometryGrid([0.2, 0.3, 0.45, 0.7, 1.0], [0.5, 1, 2, 4, 8])
+    cause = _pre_tension()
+    whole = grid.ray_ids(SPEC, 0.45, cause)
+    shares = [grid.ray_ids(SPEC, 0.45, cause, [h]) for h in grid.th_nodes]
+    assert sum(shares, []) == whole and len(whole) == 5 * 2 * 2  # t_h x nodes x X1h/X1d
+    assert all("_td0.45_th2__" in rid for rid in shares[2])
+
+
 def test_a_cause_with_other_nodes_than_its_geometry_space_is_solved(cause_space, tmp_path):
     from skinsuction.space import Cause
 

@@ -79,12 +79,19 @@ if SF.get("geometry"):
     except ValueError as err:
         raise _config_error("scale_free_space.geometry", err)
 SF_GEOMETRY_DIR = f"{SF_DIR}/{GEOMETRY_FOLDER}"
-# one job per model and t_d/a node: "td0.125" (neo-Hookean), "pre_tension__td0.125"
-SF_GEOMETRY_BUNDLES = {
-    (f"{m}__" if m != BASELINE else "") + f"td{td:g}": (m, td, cause, grid)
-    for m, (cause, grid) in SF_GEOMETRY.items()
-    for td in grid.td_nodes
-}
+# one job per model and t_d/a node: "td0.125" (neo-Hookean), "strain_stiffening__td0.125";
+# a cause with t_h_per_job: one per t_d/a node and that many t_h/a nodes,
+# "pre_tension__td0.125__th0.125" (jobs of minutes: a cut run or a cluster loses less)
+SF_GEOMETRY_BUNDLES = {}
+for _m, (_cause, _grid) in SF_GEOMETRY.items():
+    _k = ((SF.get("geometry") or {}).get("causes") or {}).get("t_h_per_job", {}).get(_m)
+    _k = _k or len(_grid.th_nodes)
+    for _td in _grid.td_nodes:
+        for _j in range(0, len(_grid.th_nodes), _k):
+            _ths = _grid.th_nodes[_j : _j + _k]
+            _name = (f"{_m}__" if _m != BASELINE else "") + f"td{_td:g}"
+            _name += "" if _k >= len(_grid.th_nodes) else f"__th{_ths[0]:g}"
+            SF_GEOMETRY_BUNDLES[_name] = (_m, _td, _cause, _grid, _ths)
 SF_GEOMETRY_SPACES = {m: f"{SF_GEOMETRY_DIR}/{m}.parquet" for m in SF_GEOMETRY}
 SF_GEOMETRY_SPACE = [SF_GEOMETRY_SPACES[BASELINE]] if SF_GEOMETRY else []
 
@@ -161,7 +168,7 @@ rule simulate_geometry_bundle:
         "results/benchmarks/scale_free/geometry/{gbundle}.tsv"
     params:
         bundle=lambda w: f"geometry__{w.gbundle}",
-        rays=lambda w: (lambda m, td, cause, grid: grid.ray_ids(SF_SPEC, td, cause))(
+        rays=lambda w: (lambda m, td, cause, grid, ths: grid.ray_ids(SF_SPEC, td, cause, ths))(
             *SF_GEOMETRY_BUNDLES[w.gbundle]
         ),
         pressures=list(SF_SPEC.pressures_mbar),

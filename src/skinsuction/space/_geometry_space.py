@@ -104,18 +104,22 @@ class GeometryGrid:
         return (self.td_nodes[0] <= td_a <= self.td_nodes[-1]
                 and self.th_nodes[0] <= th_a <= self.th_nodes[-1])
 
-    def ray_ids(self, spec: RaySpec, td_a: float | None = None, cause=None) -> list:
+    def ray_ids(self, spec: RaySpec, td_a: float | None = None, cause=None,
+                th_nodes=None) -> list:
         """The FE rays of the grid (at ``a = 1 mm``), or of one ``t_d / a`` node.
 
         They are the ray ids :class:`OnDemandRays` solves at those layers, so the
         grid's rays and the rays on demand are the same FE runs.  With a ``cause``
         (not a thickness), its rays at each of its nodes but the neutral one,
-        ordered by ``t_d``, ``t_h``, cause node, X1h/X1d.
+        ordered by ``t_d``, ``t_h``, cause node, X1h/X1d.  ``th_nodes``: only these
+        ``t_h / a`` nodes (a job's share).
         """
         tds = self.td_nodes if td_a is None else (round_sig(td_a, _NODE_DIGITS),)
+        ths = self.th_nodes if th_nodes is None else tuple(round_sig(h, _NODE_DIGITS)
+                                                           for h in th_nodes)
         coords = [None] if cause is None else cause_coordinates(cause)
         return [ray_id(_ray_params(spec, 2.0, r, cause, c, {"t_d": d, "t_h": h}, digits=6))
-                for d in tds for h in self.th_nodes for c in coords for r in spec.ratio_nodes]
+                for d in tds for h in ths for c in coords for r in spec.ratio_nodes]
 
 
 def cause_coordinates(cause) -> list:
