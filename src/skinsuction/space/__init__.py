@@ -103,6 +103,7 @@ from ._pairs import (
     read_pair_spaces,
     space_causes,
 )
+from ._geometry_files import default_geometry_file, geometry_file_for, ship_geometry_space
 from ._geometry_space import (
     GEOMETRY_FOLDER,
     GeometryGrid,
@@ -110,11 +111,8 @@ from ._geometry_space import (
     assemble_geometry_space,
     cause_coordinates,
     cause_geometry_space,
-    default_geometry_file,
-    geometry_file_for,
     read_geometry_space,
     same_rays,
-    ship_geometry_space,
 )
 from ._ray_solve import build_ray_spaces, compute_bundle, compute_ray
 from ._ray_space import (

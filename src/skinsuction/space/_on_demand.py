@@ -343,7 +343,7 @@ def _geometry_space(geometry, spec):
     if isinstance(geometry, GeometrySpace):
         space = geometry
     elif isinstance(geometry, str) and geometry == "auto":
-        from ._geometry_space import default_geometry_file
+        from ._geometry_files import default_geometry_file
 
         path = default_geometry_file()
         if path is None:

@@ -19,7 +19,7 @@ from skinsuction.measured import Geometry
 
 from ._causes import BASELINE
 from ._geometry import GeometryOutsideSpace, spaces_at
-from ._geometry_space import geometry_file_for
+from ._geometry_files import geometry_file_for
 from ._grid import read_space
 from ._interpolate import GriddedSpace
 from ._on_demand import OnDemandRays
