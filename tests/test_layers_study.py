@@ -76,13 +76,20 @@ def test_the_check_counts_coverage_verdicts_and_the_group_ratio():
     check = layers_study_check(curves, truth)
     (row,) = check["per_measurement"]
     assert (row["n"], row["x1d_covered"], row["x1h_covered"]) == (8, 7, 8)
+    # an end flagged open (its value the space's edge) holds what lies beyond it
+    edge = curves.assign(x1h_lower_mpa=1.5e-3, x1h_lower_open=[True] * 4 + [False] * 4)
+    (row_edge,) = layers_study_check(edge, truth)["per_measurement"]
+    assert row_edge["x1h_covered"] == 4
     assert row["x1d_error_median"] == pytest.approx(0.0, abs=1e-12)
     assert row["causes"] == "none 7; strain_stiffening 1"
     on = {g["on"]: g for g in check["groups"]}
-    # treated/control median X1d: truth 0.0325 / 0.026 = +25 %
-    assert on["truth"]["median_ratio_percent"] == pytest.approx(25.0)
-    expected = np.median(est[:4]) / np.median(est[4:]) - 1  # (0.0297 + 0.035) / 2 / 0.026
-    assert on["estimates"]["median_ratio_percent"] == pytest.approx(100 * expected)
+    # the study's statistic, the change of the median log X1d: each treated truth is
+    # 1.25 x a control one, so +25 % exactly
+    assert on["truth"]["median_change_percent"] == pytest.approx(25.0)
+    log = np.log(est)
+    expected = np.exp(np.median(log[:4]) - np.median(log[4:])) - 1
+    assert on["estimates"]["median_change_percent"] == pytest.approx(100 * expected)
+    assert on["truth"]["n"] == 8 and on["truth"]["ci_low_percent"] <= 25.0
     md = layers_study_markdown(check, LayersStudyDesign(subjects=8), seconds=12.0)
     assert "7 (88 %)" in md and "+25.0 %" in md
     with pytest.raises(ValueError, match="without a truth"):

@@ -259,8 +259,15 @@ def _readme(design: LayersStudyDesign) -> str:
 
 
 def _interval_holds(rows: pd.DataFrame, truth: pd.Series, name: str) -> pd.Series:
+    """Whether each interval holds the truth; an open end (its flag, or no value) holds
+    all beyond it: there the data do not bound the parameter."""
+    def is_open(end):
+        flag = rows.get(f"{name}_{end}_open")
+        missing = rows[f"{name}_{end}_mpa"].isna()
+        return missing if flag is None else missing | flag.fillna(False).astype(bool)
+
     lo, hi = rows[f"{name}_lower_mpa"], rows[f"{name}_upper_mpa"]
-    return (lo.isna() | (lo <= truth)) & (hi.isna() | (truth <= hi))
+    return (is_open("lower") | (lo <= truth)) & (is_open("upper") | (truth <= hi))
 
 
 def layers_study_check(curves: pd.DataFrame, truth: pd.DataFrame) -> dict:
@@ -279,11 +286,12 @@ def layers_study_check(curves: pd.DataFrame, truth: pd.DataFrame) -> dict:
         ``per_measurement``: rows of the coverage of the 95 % intervals of X1d and
         X1h (an open end counts as holding), the median and 95th percentile of
         the X1d error, the errors, and the verdicts, per kind of measurement
-        (ramp, mode 1); ``groups``: per kind, the treated/control ratio of the
-        median X1d and its Mann-Whitney p, on the estimates and on the true X1d
-        of the same subjects.
+        (ramp, mode 1); ``groups``: per kind, the study's own group comparison
+        (:func:`skinsuction.cohort.compare_groups`: the treated/control change of
+        the median log X1d, its bootstrap interval, the Mann-Whitney p) on the
+        estimates and on the true X1d of the same subjects.
     """
-    from scipy import stats
+    from skinsuction.cohort import compare_groups
 
     c = curves.copy()
     c["file_name"] = c["file"].map(lambda f: Path(str(f)).name)
@@ -307,15 +315,14 @@ def layers_study_check(curves: pd.DataFrame, truth: pd.DataFrame) -> dict:
                     "x1d_error_p95": float(err.quantile(0.95)) if len(ok) else math.nan,
                     "causes": "; ".join(f"{k} {v}" for k, v in sorted(verdicts.items()))})
         for what, col in (("estimates", "x1d_mpa"), ("truth", "true_x1d_mpa")):
-            t = ok.loc[ok["true_group"] == "treated", col].to_numpy(float)
-            r = ok.loc[ok["true_group"] == "control", col].to_numpy(float)
-            if t.size < 2 or r.size < 2:
-                continue
-            u = stats.mannwhitneyu(np.log(t), np.log(r), alternative="two-sided")
-            groups.append({"measurement": kind, "on": what, "n_treated": t.size,
-                           "n_control": r.size,
-                           "median_ratio_percent": 100 * (np.median(t) / np.median(r) - 1),
-                           "p_value": float(u.pvalue)})
+            # the study's own comparison (comparison.csv), on the estimates and on the truth
+            frame = pd.DataFrame({"group": ok["true_group"].to_numpy(),
+                                  "x1d_mpa": ok[col].to_numpy(float)})
+            for r in compare_groups(frame, reference="control", seed=0)[0]:
+                groups.append({"measurement": kind, "on": what, "n": r["n"],
+                               **{k: r.get(k) for k in ("median_change_percent",
+                                                        "ci_low_percent", "ci_high_percent",
+                                                        "p_value")}})
     return {"per_measurement": per, "groups": groups}
 
 
@@ -335,9 +342,12 @@ def layers_study_markdown(check: dict, design: LayersStudyDesign, seconds=None) 
                      f"{r['x1h_covered']} ({100 * r['x1h_coverage']:.0f} %) | "
                      f"{100 * r['x1d_error_median']:.2f} % | {100 * r['x1d_error_p95']:.2f} % | "
                      f"{r['causes']} |")
-    lines += ["", "Treated against control, median X1d (Mann-Whitney U on log X1d):", "",
-              "| measurement | on | n | median ratio | p |", "|---|---|---|---|---|"]
+    lines += ["", "Treated against control, the study's comparison (median log X1d, "
+              "Mann-Whitney U), on the estimates and on the truth:", "",
+              "| measurement | on | n | median change | bootstrap 95 % | p |",
+              "|---|---|---|---|---|---|"]
     for g in check["groups"]:
-        lines.append(f"| {g['measurement']} | {g['on']} | {g['n_treated']} + {g['n_control']} | "
-                     f"{g['median_ratio_percent']:+.1f} % | {g['p_value']:.2g} |")
+        lines.append(f"| {g['measurement']} | {g['on']} | {g['n']} | "
+                     f"{g['median_change_percent']:+.1f} % | {g['ci_low_percent']:+.1f} … "
+                     f"{g['ci_high_percent']:+.1f} % | {g['p_value']:.2g} |")
     return "\n".join(lines) + "\n"
