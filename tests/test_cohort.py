@@ -175,3 +175,52 @@ def test_ramps_and_time_curves_are_compared_apart():
     # one protocol only: as before, no protocol column in the rows
     rows, _ = compare_groups(ramp)
     assert "protocol" not in rows[0]
+
+
+def test_a_study_cut_short_resumes_with_the_rows_it_had_finished(tmp_path, monkeypatch):
+    import skinsuction.cohort._rows as rows_module
+
+    path = tmp_path / "study.csv"
+    _long_study(path, n_per_group=2)
+    space, rays = _toy_space()
+    kw = dict(space=space, ray_spaces=rays, diagnose=True, repeats=1, seed=0, progress=False,
+              figures=False, diagnosis_settings={"window_focusing": {"n_samples": 300}})
+    run_study(path, tmp_path / "whole", **kw)
+    whole = pd.read_parquet(tmp_path / "whole" / "curves.parquet")
+
+    real, calls = rows_module._analyse, []
+
+    def cut_after_three(job):
+        if len(calls) == 3:
+            raise KeyboardInterrupt  # the run is killed while analysing the 4th
+        calls.append(job[0])
+        return real(job)
+
+    monkeypatch.setattr(rows_module, "_analyse", cut_after_three)
+    with pytest.raises(KeyboardInterrupt):
+        run_study(path, tmp_path / "cut", **kw)
+    kept = (tmp_path / "cut" / "rows.partial.jsonl").read_text().splitlines()
+    assert len(kept) == 1 + 3 and not (tmp_path / "cut" / "curves.parquet").exists()
+
+    def counted(job):
+        calls.append(job[0])
+        return real(job)
+
+    calls.clear()
+    monkeypatch.setattr(rows_module, "_analyse", counted)
+    r = run_study(path, tmp_path / "cut", **kw)
+    assert r["resumed"] == 3 and sorted(calls) == list(range(3, len(whole)))
+    resumed = pd.read_parquet(tmp_path / "cut" / "curves.parquet")
+    pd.testing.assert_frame_equal(resumed.drop(columns="seconds"),
+                                  whole.drop(columns="seconds"))
+    assert not (tmp_path / "cut" / "rows.partial.jsonl").exists()
+    # other settings (another seed): the rows are not reused, and not lost either
+    monkeypatch.setattr(rows_module, "_analyse", cut_after_three)
+    calls.clear()
+    with pytest.raises(KeyboardInterrupt):
+        run_study(path, tmp_path / "cut", **{**kw, "seed": 1})
+    calls.clear()
+    monkeypatch.setattr(rows_module, "_analyse", counted)
+    r = run_study(path, tmp_path / "cut", **kw)
+    assert r["resumed"] == 0 and len(calls) == len(whole)
+    assert (tmp_path / "cut" / "rows.partial.jsonl.stale").exists()

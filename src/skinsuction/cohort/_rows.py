@@ -303,7 +303,7 @@ def _write_time_report(diag, out_dir):
 # ------------------------------------------------------------------ every measurement
 def study_rows(entries, *, space, ray_spaces=None, settings=None, repeats: int = 2,
                seed: int = 0, level: float = 0.95, workers: int = 1, reports_dir=None,
-               progress=None, pair_spaces=None) -> list:
+               progress=None, pair_spaces=None, checkpoint=None) -> list:
     """One row per measurement of a study: identified (and diagnosed).
 
     Parameters
@@ -328,6 +328,9 @@ def study_rows(entries, *, space, ray_spaces=None, settings=None, repeats: int =
         As for :class:`skinsuction.Progress`; False: none.
     pair_spaces : dict, optional
         ``{name: PairRaySpace}``: the ramps' second effect (:func:`skinsuction.diagnose.diagnose`).
+    checkpoint : skinsuction.cohort.Checkpoint, optional
+        Rows it holds are taken as they are; each new row is added to it as it
+        finishes (a run cut short keeps them).
 
     Returns
     -------
@@ -339,24 +342,35 @@ def study_rows(entries, *, space, ray_spaces=None, settings=None, repeats: int =
            "settings": settings,
            "repeats": int(repeats), "seed": int(seed), "level": float(level),
            "reports_dir": reports_dir}
-    jobs = [(i, e, sha) for i, (e, sha) in enumerate(entries)]
+    rows = {}
+    jobs = []
+    for i, (e, sha) in enumerate(entries):
+        done = checkpoint.finished(i, e.source, sha, int(seed) + i) if checkpoint else None
+        if done is not None:
+            rows[i] = done
+        else:
+            jobs.append((i, e, sha))
     bar = Progress(len(jobs), "study", "measurements", progress) if progress is not False else None
-    rows = []
+
+    def keep(row):
+        rows[row["row"]] = row
+        if checkpoint is not None:
+            checkpoint.add(row)
+        if bar:
+            bar.step()
+
     if workers > 1 and len(jobs) > 1:
         import multiprocessing as mp
 
         # fork: the workers share the spaces read once by the parent
         with mp.get_context("fork").Pool(workers, initializer=_init, initargs=(ctx,)) as pool:
-            for row in pool.imap(_analyse, jobs, chunksize=1):
-                rows.append(row)
-                if bar:
-                    bar.step()
+            for row in pool.imap_unordered(_analyse, jobs, chunksize=1):
+                keep(row)
     else:
         _init(ctx)
         for job in jobs:
-            rows.append(_analyse(job))
-            if bar:
-                bar.step()
+            keep(_analyse(job))
+    rows = [rows[i] for i in range(len(entries))]
     out = []
     for (entry, _), row in zip(entries, rows):
         ids = {(f"id_{k}" if k in RESULT_COLUMNS else k): str(v) for k, v in entry.ids.items()}

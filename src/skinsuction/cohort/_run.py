@@ -9,9 +9,11 @@ and the files); :func:`run_study` composes them.
 from __future__ import annotations
 
 import datetime as _dt
+import sys
 import time
 from pathlib import Path
 
+from ._checkpoint import CHECKPOINT_FILE, Checkpoint
 from ._compare import compare_groups
 from ._discover import discover
 from ._rows import RESULT_COLUMNS, study_rows
@@ -24,7 +26,7 @@ def run_study(path, out_dir, *, space_dir=None,
               diagnose: bool = True, repeats: int = 2, seed: int = 0, level: float = 0.95,
               workers: int = 1, reports: bool = False, name: str | None = None,
               diagnosis_settings: dict | None = None, figures: bool = True,
-              progress=None, space=None, ray_spaces=None) -> dict:
+              progress=None, space=None, ray_spaces=None, resume: bool = True) -> dict:
     """Identify (and diagnose) every measurement of a study and write its outputs.
 
     Parameters
@@ -52,6 +54,13 @@ def run_study(path, out_dir, *, space_dir=None,
     space, ray_spaces : optional
         A :class:`skinsuction.space.LoadedSpace` and the ray spaces
         ``{name: RaySpace}`` instead of reading ``space_dir`` (tests, notebooks).
+    resume : bool
+        Each finished row is kept in ``out_dir/rows.partial.jsonl`` until the
+        study's files are written.  True: a rerun with the same files, space,
+        settings and version takes the rows an earlier run cut short had
+        finished, and analyses only the rest (``resumed`` in the result and in
+        ``study.json``).  False: start afresh.  Rows of other settings are kept
+        aside as ``rows.partial.jsonl.stale``, never reused.
 
     Returns
     -------
@@ -98,17 +107,32 @@ def run_study(path, out_dir, *, space_dir=None,
     space, entries = _measurements(path, space_dir, space)
     ray_spaces, pairs, settings = (_diagnosis(space_dir, ray_spaces, diagnosis_settings, level)
                                    if diagnose else (None, None, None))
-    rows = study_rows(entries, space=space, ray_spaces=ray_spaces, settings=settings,
-                      pair_spaces=pairs,
-                      repeats=repeats, seed=seed, level=level, workers=workers,
-                      reports_dir=(out / "reports") if reports else None, progress=progress)
+    from skinsuction import __version__
+
+    checkpoint = Checkpoint(out / CHECKPOINT_FILE, {
+        "space": str(space_dir), "space_sha256": space.info.get("sha256"),
+        "ray_spaces": sorted(ray_spaces or ()), "pairs": sorted(pairs or ()),
+        "settings": settings.__dict__ if settings is not None else None,
+        "repeats": int(repeats), "seed": int(seed), "level": float(level),
+        "reports": bool(reports), "version": __version__}, resume=resume)
+    if progress is not False and (checkpoint.resumed or checkpoint.stale):
+        print(f"study: {checkpoint.resumed} finished measurements taken from {checkpoint.path}"
+              + (f"; rows of other settings kept aside in {checkpoint.stale}"
+                 if checkpoint.stale else ""), file=sys.stderr)
+    with checkpoint:
+        rows = study_rows(entries, space=space, ray_spaces=ray_spaces, settings=settings,
+                          pair_spaces=pairs, repeats=repeats, seed=seed, level=level,
+                          workers=workers, reports_dir=(out / "reports") if reports else None,
+                          progress=progress, checkpoint=checkpoint)
     df, id_cols = study_frame(rows)
     comparison, notes = compare_groups(df, seed=seed)
     seconds = time.perf_counter() - t0
     meta = _record(name or Path(path).stem, path, space_dir, space, space_info, settings,
                    df, seconds, diagnose=diagnose, repeats=repeats, seed=seed, level=level,
                    workers=workers)
+    meta["resumed"] = checkpoint.resumed
     paths = write_study_files(out, df, id_cols, comparison, notes, meta)
+    checkpoint.remove()
     if figures:
         from skinsuction.figures.cohort import write_study_figures
 
@@ -116,6 +140,7 @@ def run_study(path, out_dir, *, space_dir=None,
     return {"paths": {k: str(v) for k, v in paths.items()},
             "space": space_text(meta, markdown=False), "measurements": int(len(df)),
             "errors": meta["errors"], "seconds": seconds, "comparison": comparison,
+            "resumed": checkpoint.resumed,
             "notes": notes}
 
 

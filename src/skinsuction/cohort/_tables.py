@@ -146,7 +146,9 @@ def summary_markdown(df, id_cols, comparison, notes, meta) -> str:
              f"{len(errors)} with an error. Identification with 95 % profile-likelihood "
              f"intervals on {space_text(meta)}; diagnosis: "
              f"{'yes' if meta['diagnose'] else 'no'}. "
-             f"{meta['seconds']:.1f} s on {meta['workers']} worker(s).", ""]
+             f"{meta['seconds']:.1f} s on {meta['workers']} worker(s)"
+             + (f", {meta['resumed']} measurements taken from a run cut short"
+                if meta.get("resumed") else "") + ".", ""]
     if "group" in df.columns:
         lines += _group_lines(df)
     lines += ["## Group comparison", "", *[f"- {t}" for t in notes], "",

@@ -63,6 +63,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--reports", action="store_true",
                    help="also write each measurement's identification and diagnosis files "
                         "(off by default: thousands of folders for big studies)")
+    p.add_argument("--restart", action="store_true",
+                   help="analyse every measurement afresh. By default a rerun into the same "
+                        "--out with the same files, space and settings takes the rows a run "
+                        "cut short had finished (kept in DIR/rows.partial.jsonl)")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -83,12 +87,13 @@ def run(args: argparse.Namespace) -> int:
     try:
         r = run_study(args.path, args.out, space_dir=args.space, diagnose=not args.no_diagnose,
                       repeats=args.repeats, seed=args.seed, level=args.level,
-                      workers=args.workers, reports=args.reports)
+                      workers=args.workers, reports=args.reports, resume=not args.restart)
     except FileNotFoundError as err:
         raise CLIError(str(err)) from None
     print(f"space: {r['space']}")
     print(f"{r['measurements']} measurements, {r['errors']} with an error, "
-          f"{r['seconds']:.1f} s")
+          f"{r['seconds']:.1f} s"
+          + (f" ({r['resumed']} taken from the run cut short)" if r["resumed"] else ""))
     for c in r["comparison"]:
         if c.get("p_value") is None:
             continue
