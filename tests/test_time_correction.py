@@ -68,3 +68,22 @@ def test_the_correction_recovers_the_skin_the_fast_path_misses(fe_curves):
         np.testing.assert_allclose(d.deflection_mm - fitted, 1e-3 * res, atol=1e-12)
         assert 1e3 * np.abs(d.deflection_mm - c.deflection_mm).max() == pytest.approx(
             rec["delta_max_um"][d.label])
+
+
+def test_graded_steps_give_the_solve_at_every_sample(fe_curves):
+    """The correction's FE solves step 1 ms after each switch, growing by 1.25 to 0.1 s,
+    and read the samples by PCHIP: the same curve as a step at every sample (the time
+    scheme is second order; a finer grading converges to it)."""
+    from skinsuction.identify._time_correction import fe_time_curve
+    from skinsuction.space import load_space
+
+    prep = prepare_time_fit(fe_curves, load_space(), noise_um=3.0)
+    d = next(c for c in prep["data"] if c.probe_mm == 8.0)
+    skin = _skin(TRUTH)
+    mesh = {"refinement": 0.5}
+    samples = fe_time_curve(skin, d, mesh, steps="samples")
+    graded = fe_time_curve(skin, d, mesh, steps="graded")
+    assert 1e3 * np.abs(graded - samples).max() < 0.1  # µm, against 3 µm noise
+    assert 1e3 * samples.max() > 500  # a large deflection, strong creep: not a trivial case
+    with pytest.raises(ValueError, match="graded"):
+        fe_time_curve(skin, d, mesh, steps="every")
