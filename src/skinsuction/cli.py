@@ -9,6 +9,7 @@
         [--seed 0] --out DIR
     skinsuction diagnose MEASURED.csv --out DIR
     skinsuction study FOLDER_OR_LONG.csv --out DIR [--no-diagnose] [--workers 2]
+    skinsuction design --out DIR [--probes 2 2+6 4+8] [--suction 100 500] [--precision X1h=0.2]
     skinsuction rparams TIME_CURVES.csv --out DIR [--ue-time-s 0.1]
     skinsuction check-config CONFIG.yaml
 
@@ -46,6 +47,7 @@ from skinsuction.commands import (
     EXIT_OK,
     CLIError,
     check_config,
+    design,
     diagnose,
     export_inp,
     identify,
@@ -108,6 +110,7 @@ COMMANDS = {
         Command.of("identify", identify),
         Command.of("diagnose", diagnose),
         Command.of("study", study),
+        Command.of("design", design),
         Command.of("rparams", rparams),
         Command.of("check-config", check_config),
         Command.of("export-inp", export_inp),

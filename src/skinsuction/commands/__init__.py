@@ -1,6 +1,6 @@
 """The subcommands of ``skinsuction``, one module each.
 
-Every module (``simulate``, ``export_inp``, ``identify``, ``diagnose``, ``study``,
+Every module (``simulate``, ``export_inp``, ``identify``, ``diagnose``, ``study``, ``design``,
 ``rparams``, ``check_config``) has ``HELP`` and ``DESCRIPTION`` (its ``--help`` texts),
 ``add_arguments(parser)`` and ``run(args) -> int`` (the exit code); the registry
 of :mod:`skinsuction.cli` names them.  What they share (exit codes, the
@@ -31,5 +31,5 @@ from ._common import (
     CLIError,
 )
 
-__all__ = ["check_config", "diagnose", "export_inp", "identify", "rparams", "simulate", "study", "CLIError",
+__all__ = ["check_config", "design", "diagnose", "export_inp", "identify", "rparams", "simulate", "study", "CLIError",
            "EXIT_OK", "EXIT_INTERNAL", "EXIT_INPUT", "EXIT_NOT_CONVERGED", "EXIT_INTERRUPTED"]

@@ -1,0 +1,171 @@
+"""``skinsuction design``: predictions from noise-free curves against realised fits."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from skinsuction.design import (
+    Box,
+    Design,
+    Question,
+    designs_from,
+    predict_designs,
+    predict_skin,
+    recommend,
+    skins_from_table,
+    summarize,
+)
+from skinsuction.diagnose import FitData, ModelCurves, Settings, fit_intervals, fit_model
+from skinsuction.space import SHIPPED_SPACE_DIR, read_ray_spaces
+
+
+@pytest.fixture(scope="module")
+def spaces():
+    return read_ray_spaces(SHIPPED_SPACE_DIR)
+
+
+def _skin(x1d=0.04, ratio=0.03):
+    return {"skin": 0, "x1d_mpa": x1d, "x1h_ratio": ratio, "t_d_mm": 1.0, "t_h_mm": 1.0}
+
+
+def test_predicted_intervals_are_those_noisy_measurements_get(spaces):
+    """The prediction (profile likelihood on the noise-free curves) against 40 noisy
+    measurements of the same skin: Gaussian noise and the 0.01 mm rounding, each fitted
+    and given its intervals as `identify` does. The realised median half-width is the
+    predicted one, and the intervals cover the truth at their level."""
+    settings = Settings()
+    design = Design((2.0, 6.0), 100.0, noise_um=2.0, resolution_mm=0.01)
+    skin = _skin()
+    pred = predict_skin(skin, design, spaces, settings)
+    base = spaces["neo_hookean"]
+    theta = np.array([math.log10(skin["x1d_mpa"]), math.log10(skin["x1h_ratio"])])
+    p = design.pressures()
+    sigma = design.sigma_um(settings.model_error_um)
+    blank = {q: FitData(q, p, np.zeros_like(p), sigma) for q in design.probes_mm}
+    clean = ModelCurves(base, blank)(theta[None])
+    rng = np.random.default_rng(5)
+    widths, covered = {"X1d": [], "X1h": []}, {"X1d": [], "X1h": []}
+    truth = {"X1d": skin["x1d_mpa"], "X1h": skin["x1d_mpa"] * skin["x1h_ratio"]}
+    for _ in range(40):
+        fd = {}
+        for q in design.probes_mm:
+            m = np.round(clean[q][0] + rng.normal(0, 2e-3, p.size), 2)  # 0.01 mm reading
+            fd[q] = FitData(q, p, m, sigma)
+        f = fit_model(base, fd, seed=0, repeats=1)
+        iv = fit_intervals(base, fd, f.theta).parameters
+        for k in widths:
+            est = f.parameters[k]
+            widths[k].append(max(iv[k].upper / est - 1, 1 - iv[k].lower / est))
+            covered[k].append(iv[k].lower <= truth[k] <= iv[k].upper)
+    for k in widths:
+        ratio = np.median(widths[k]) / pred[f"{k}_halfwidth"]
+        assert 0.85 < ratio < 1.15, (k, ratio)
+        assert np.mean(covered[k]) >= 0.85, (k, np.mean(covered[k]))
+
+
+def test_half_widths_scale_with_the_noise(spaces):
+    """Where the interval is small the model is linear across it: twice the sd, twice
+    the half-width (the Fisher limit), without rounding or the spaces' own error."""
+    settings = Settings(model_error_um=0.0)
+    w = {}
+    for noise in (1.0, 2.0):
+        d = Design((2.0, 6.0), 100.0, noise_um=noise, resolution_mm=0.0)
+        w[noise] = predict_skin(_skin(), d, spaces, settings)
+    for k in ("X1d", "X1h"):
+        assert w[2.0][f"{k}_halfwidth"] / w[1.0][f"{k}_halfwidth"] == pytest.approx(2.0, rel=0.06)
+
+
+def test_the_paper_s_figure_4_before_measuring_and_the_recommendation(spaces):
+    """The 2 mm probe alone leaves X1h open (the paper's Figure 4); asked for X1h to
+    ±20 %, the tool recommends a design with a larger probe, the fewest probes first."""
+    skins = Box(x1d_mpa=(0.02, 0.08), x1h_ratio=(0.01, 0.1)).draw(6, seed=3)
+    designs = designs_from(["2", "6", "2+6"], [100])
+    rows = predict_designs(skins, designs, spaces=spaces, settings=Settings(), progress=False)
+    summary = summarize(rows, designs)
+    by = summary.set_index("design")
+    assert by.loc["2 mm, 100 mbar", "X1h_bounded"] < 0.5
+    assert by.loc["2+6 mm, 100 mbar", "X1h_bounded"] == 1.0
+    assert by.loc["2+6 mm, 100 mbar", "X1h_quantile"] < 0.2
+    choice = recommend(summary, Question({"X1h": 0.2}))
+    assert choice["met"] and "2+6 mm, 100 mbar" in choice["meeting"]
+    assert "2 mm, 100 mbar" not in choice["meeting"]
+    # the fewest probes first: the 6 mm probe alone wins if it meets the question
+    single = by.loc["6 mm, 100 mbar", "X1h_quantile"] <= 0.2
+    assert choice["design"] == ("6 mm, 100 mbar" if single else "2+6 mm, 100 mbar")
+    # an impossible target: no design meets it, and the best one is still offered
+    none = recommend(summary, Question({"X1h": 1e-4}))
+    assert not none["met"] and none["design"] == by["X1h_quantile"].idxmin()
+
+
+def test_causes_detectability_and_the_ceiling_between_mimics(spaces):
+    """To 100 mbar on 2 + 6 mm a hypodermis three times thicker is detectable but
+    pre-tension mimics it (a chi^2 gap below 1: a ceiling near a coin toss), while a
+    stiffening dermis is told from both; to 300 mbar pre-tension can no longer mimic
+    the thick hypodermis (it stiffens where the thick hypodermis softens)."""
+    from skinsuction.evaluation import attribution_ceiling
+
+    skin = {**_skin(0.05, 0.05), "t_h_cause_mm": 3.0, "lambda0": 1.1, "x2d_ratio": 300.0}
+    causes = ("hypodermis_thickness", "pre_tension", "strain_stiffening")
+    low = predict_skin(skin, Design((2.0, 6.0), 100.0), spaces, Settings(), causes=causes)
+    assert low["hypodermis_thickness_detectable"] and low["strain_stiffening_detectable"]
+    assert low["hypodermis_thickness_vs_pre_tension_gap"] < 1.0
+    assert attribution_ceiling(low["hypodermis_thickness_vs_pre_tension_gap"]) < 0.7
+    assert min(low["strain_stiffening_vs_pre_tension_gap"],
+               low["strain_stiffening_vs_hypodermis_thickness_gap"]) > 10.0
+    high = predict_skin(skin, Design((2.0, 6.0), 300.0), spaces, Settings(), causes=causes)
+    assert high["hypodermis_thickness_vs_pre_tension_gap"] > 100.0
+    # more suction, narrower intervals
+    assert high["X1d_halfwidth"] < low["X1d_halfwidth"]
+    assert high["hypodermis_thickness_halfwidth"] < low["hypodermis_thickness_halfwidth"]
+
+
+def test_a_ramp_beyond_the_space_is_flagged_not_predicted(spaces, tmp_path):
+    from skinsuction.design import run_design
+
+    skins = Box(x1d_mpa=0.007, x1h_ratio=0.05).draw(2, seed=0)
+    r = run_design(skins, designs_from(["2"], [100, 500]), Question({"X1d": 0.5}),
+                   tmp_path, figures=False, progress=False)
+    rows = r["rows"].set_index("design")
+    assert rows.loc["2 mm, 500 mbar", "beyond_space"].all()
+    assert not rows.loc["2 mm, 100 mbar", "beyond_space"].any()
+    text = (tmp_path / "design.md").read_text()
+    assert "BEYOND THE SPACE" in text and "2 skins with 2 mm, 500 mbar" in text
+    assert r["recommendation"]["design"] == "2 mm, 100 mbar"
+
+
+def test_bad_designs_and_tables_are_named(tmp_path):
+    with pytest.raises(ValueError, match="among 2, 4, 6, 8"):
+        Design((3.0,))
+    with pytest.raises(ValueError, match="500"):
+        Design((2.0,), 800.0)
+    with pytest.raises(ValueError, match="unknown causes"):
+        Question(tell=("creep",))
+    bad = tmp_path / "t.csv"
+    pd.DataFrame({"x1d": [0.1]}).to_csv(bad, index=False)
+    with pytest.raises(ValueError, match=r"t\.csv: no column x1d_mpa"):
+        skins_from_table(bad)
+    good = tmp_path / "g.csv"
+    pd.DataFrame({"x1d_mpa": [0.03, None], "x1h_mpa": [3e-4, 1e-3],
+                  "dermis_thickness_mm": [1.3, 1.0]}).to_csv(good, index=False)
+    skins = skins_from_table(good)
+    assert len(skins) == 1 and skins["t_d_mm"].tolist() == [1.3]
+    assert skins["x1h_ratio"].iloc[0] == pytest.approx(0.01)
+
+
+def test_the_command_writes_the_table_the_figure_and_the_recommendation(tmp_path, capsys):
+    from skinsuction.cli import main
+
+    out = tmp_path / "design"
+    code = main(["design", "--out", str(out), "--n-skins", "3", "--probes", "2", "2+6",
+                 "--suction", "100", "--precision", "X1h=0.3", "--x1d", "0.02", "0.06"])
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "recommended: 2+6 mm, 100 mbar" in printed
+    for f in ("design.md", "designs.csv", "predictions.csv", "design.json", "precision.png"):
+        assert (out / f).stat().st_size > 100, f
+    assert main(["design", "--out", str(out), "--precision", "X1h"]) == 2  # no =FRACTION
+    assert "expected NAME=VALUE, got 'X1h'" in capsys.readouterr().err
