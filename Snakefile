@@ -11,6 +11,7 @@
 #        -> identifications (Figures 4, 4b, 7, 8, timing and optimiser tables)
 #        -> diagnoses of measured files on the scale-free space (reports, Figures 5, 6)
 #        -> whole studies: every curve identified with intervals and diagnosed
+#        -> planning a measurement: the probes and suction that answer a question
 
 
 include: "workflow/rules/common.smk"
@@ -38,6 +39,11 @@ if "studies" in config:
     include: "workflow/rules/study.smk"
 
 
+if "design" in config:
+
+    include: "workflow/rules/design.smk"
+
+
 include: "workflow/rules/figures.smk"
 
 
@@ -56,4 +62,5 @@ rule all:
         IDENTIFICATION_OUTPUTS if "identification" in config else [],
         DIAGNOSIS_OUTPUTS if "diagnosis" in config else [],
         STUDY_OUTPUTS if "studies" in config else [],
+        DESIGN_OUTPUTS if "design" in config else [],
     default_target: True

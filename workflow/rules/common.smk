@@ -227,3 +227,14 @@ def build_command(config_file):
             "--replace-workflow-config scale_free_space"
         )
     return None
+
+
+def design_settings(design, which):
+    """The design rule's settings: the default question ("precision"), or the same
+    designs with the causes told apart ("causes")."""
+    d = {k: v for k, v in design.items() if k != "causes"}
+    if which == "causes":
+        causes = design.get("causes", {})
+        d["skins"] = causes.get("skins", 24)
+        d["question"] = {**d.get("question", {}), "tell": causes["tell"]}
+    return d

@@ -119,7 +119,7 @@ def predict_skin(skin: dict, design: Design, spaces: dict, settings, *, causes=(
     -------
     dict
         ``design``, ``skin``, ``beyond_space`` (the ramp leaves the space: p/X1d
-        above its load range), ``notes``; ``<P>_halfwidth`` and ``<P>_bounded`` for
+        above its load range, or the rays stop before its top), ``notes``; ``<P>_halfwidth`` and ``<P>_bounded`` for
         X1d, X1h; per cause ``<c>_detectable``, ``<c>_nh_chi2``,
         ``<c>_halfwidth``, ``<c>_bounded`` and ``<c>_vs_<r>_gap``.
     """
@@ -141,6 +141,14 @@ def predict_skin(skin: dict, design: Design, spaces: dict, settings, *, causes=(
     sigma = design.sigma_um(settings.model_error_um)
     theta = np.array([math.log10(float(skin["x1d_mpa"])), math.log10(float(skin["x1h_ratio"]))])
     fd, full = _fit_data(sp[BASELINE], theta, design, sigma)
+    stops = [q for q, d in fd.items() if not np.isfinite(d.deflection_mm).all()]
+    if stops:  # the rays stop before the ramp's top here (no FE equilibrium)
+        row["beyond_space"] = True
+        row["notes"] = "; ".join([*notes, (
+            f"the neo-Hookean rays of the {'+'.join(f'{q:g}' for q in stops)} mm probe stop "
+            f"before {design.max_mbar:g} mbar at this skin (the FE model finds no "
+            "equilibrium there)")])
+        return row
     iv = _intervals(sp[BASELINE], fd, full, settings.level)
     truth = {"X1d": float(skin["x1d_mpa"]), "X1h": float(skin["x1d_mpa"] * skin["x1h_ratio"])}
     for k, v in truth.items():
@@ -149,7 +157,11 @@ def predict_skin(skin: dict, design: Design, spaces: dict, settings, *, causes=(
         if name not in sp:
             row[f"{name}_detectable"] = math.nan  # not a free cause here (its layer is given)
             continue
-        row.update(_cause_row(name, skin, sp, theta, design, sigma, settings))
+        try:
+            row.update(_cause_row(name, skin, sp, theta, design, sigma, settings))
+        except Exception as err:  # e.g. the cause's rays stop before the ramp's top
+            row[f"{name}_detectable"] = math.nan
+            row[f"{name}_error"] = f"{type(err).__name__}: {' '.join(str(err).split())}"
     return row
 
 
@@ -177,7 +189,11 @@ def _cause_row(name, skin, sp, theta, design, sigma, settings) -> dict:
         if rival in (BASELINE, name) or rs.cause is None:
             continue
         start = nested_start(base.theta, rs.cause)
-        f = fit_model(rs, fd, seed=0, repeats=1, window_focusing_options=wf,
-                      starts=[start])
+        try:
+            f = fit_model(rs, fd, seed=0, repeats=1, window_focusing_options=wf,
+                          starts=[start])
+        except ValueError:  # no curve of the rival's space near: it cannot mimic this one
+            out[f"{name}_vs_{rival}_gap"] = math.inf
+            continue
         out[f"{name}_vs_{rival}_gap"] = float(f.chi2)  # the truth's own chi^2 is 0
     return out

@@ -154,7 +154,7 @@ def _notes(rows, layered, solve_rays, causes) -> list:
     if len(beyond):
         per = beyond.groupby("design").size()
         notes.append("BEYOND THE SPACE: the ramp leaves the simulated space (p/X1d above its "
-                     "load range) for " + ", ".join(f"{n} skins with {d}" for d, n in per.items())
+                     "load range, or the rays stop before its top) for " + ", ".join(f"{n} skins with {d}" for d, n in per.items())
                      + "; counted as open (no interval).")
     if layered and causes and not solve_rays:
         notes.append("At layers other than 1 mm the causes' effects are carried over from the "
@@ -167,4 +167,10 @@ def _notes(rows, layered, solve_rays, causes) -> list:
     if len(err):
         notes.append(f"{len(err)} predictions failed (see predictions.csv, column error): "
                      f"first: {err['error'].iloc[0]}")
+    for c in causes:
+        if f"{c}_error" in rows:
+            e = rows[rows[f"{c}_error"].notna()]
+            if len(e):
+                notes.append(f"{c}: not predicted for {len(e)} skin-design pairs, counted as "
+                             f"not detectable (column {c}_error; first: {e[f'{c}_error'].iloc[0]})")
     return notes
