@@ -65,7 +65,8 @@ def test_commands_registry_is_the_parser():
     parser = cli.build_parser()
     sub = next(a for a in parser._actions if a.dest == "command")
     assert set(sub.choices) == set(cli.COMMANDS) == {"simulate", "identify", "diagnose", "study",
-                                                      "rparams", "check-config", "export-inp"}
+                                                      "design", "rparams", "check-config",
+                                                      "export-inp"}
 
 
 # ------------------------------------------------------------------ simulate

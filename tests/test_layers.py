@@ -2,7 +2,7 @@
 
 Layers, lowest first (docs/workflow.md#layout): the shared helpers, the model,
 its viscoelastic extension, the simulated space, the figures (drawing plain tables), identify, diagnose,
-then the studies (paper, cohort, and evaluation: the study of the method) and the
+then the studies (paper, cohort, design, and evaluation: the study of the method) and the
 command line.  A module may import from its own layer and the layers below, never
 from above, so the forward model knows nothing of spaces and neither the paper's
 study nor the evaluation of the method is needed to identify or diagnose a curve.  Imports inside functions count: they are arrows too.
@@ -26,7 +26,7 @@ LAYERS = [
     {"figures"},
     {"identify"},
     {"diagnose"},
-    {"paper", "cohort", "evaluation"},
+    {"paper", "cohort", "evaluation", "design"},
     {"cli", "commands", "__main__", "__init__"},
 ]
 LAYER_OF = {name: i for i, layer in enumerate(LAYERS) for name in layer}
