@@ -29,11 +29,11 @@ import math
 import sys
 import tempfile
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from _pool import run_rows
 
 from geometry_subject_cost import NOISE_MM, P, SD_MM  # same draws' noise and loads
 
@@ -136,16 +136,11 @@ def main(argv=None):
                 x1d * float(10 ** rng.uniform(math.log10(3), math.log10(300)))
                 if (i // 2) % 2 == 0 else 0.0)
         jobs.append((i, args.seed + 3000 + i, draw, space_dir, causes))
-    t0 = time.perf_counter()
-    with ProcessPoolExecutor(args.workers) as pool:
-        rows = list(pool.map(_run, jobs))
-    df = pd.DataFrame(rows)
+    df, seconds = run_rows(_run, jobs, args.workers, args.out)
     out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    df.to_csv(out, index=False)
     ok = df[df["error"].isna()] if "error" in df else df
     print(f"{len(df)} subjects ({args.seed=}), {len(ok)} with both FE curves to 100 mbar; "
-          f"{time.perf_counter() - t0:.0f} s wall on {args.workers} workers")
+          f"{seconds:.0f} s wall on {args.workers} workers")
     for mode in ("read", "solved"):
         c = ok[f"{mode}_cpu_s"]
         print(f"diagnose, rays {mode:6s}: CPU median {c.median():.1f} s, max {c.max():.1f} s; "

@@ -23,11 +23,10 @@ import math
 import sys
 import tempfile
 import time
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
+from _pool import run_rows
 
 NOISE_MM = 1.5e-3
 P = np.arange(0.0, 101.0, 2.0)
@@ -113,16 +112,11 @@ def main(argv=None):
                 float(10 ** rng.uniform(-2, math.log10(0.06))),
                 float(10 ** rng.uniform(math.log10(0.003), math.log10(0.3))))
         jobs.append((i, args.seed + 2000 + i, draw, space_dir, i < args.diagnose))
-    t0 = time.perf_counter()
-    with ProcessPoolExecutor(args.workers) as pool:
-        rows = list(pool.map(_run, jobs))
-    df = pd.DataFrame(rows)
+    df, seconds = run_rows(_run, jobs, args.workers, args.out)
     out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    df.to_csv(out, index=False)
     ok = df[df["error"].isna()] if "error" in df else df
     print(f"{len(df)} subjects ({args.seed=}), {len(ok)} with both FE curves to 100 mbar; "
-          f"{time.perf_counter() - t0:.0f} s wall on {args.workers} workers")
+          f"{seconds:.0f} s wall on {args.workers} workers")
     for mode in ("read", "solved"):
         c = ok[f"{mode}_identify_cpu_s"]
         print(f"identify, rays {mode:6s}: CPU median {c.median():.1f} s, max {c.max():.1f} s; "
