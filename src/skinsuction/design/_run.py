@@ -157,12 +157,14 @@ def _notes(rows, layered, solve_rays, causes) -> list:
                      "load range, or the rays stop before its top) for " + ", ".join(f"{n} skins with {d}" for d, n in per.items())
                      + "; counted as open (no interval).")
     if layered and causes and not solve_rays:
-        notes.append("At layers other than 1 mm the causes' effects are carried over from the "
-                      "1 mm layers they were simulated for (an approximation, "
-                      "docs/geometry.md); --solve-rays solves them at each skin's layers.")
+        notes.append("At layers given or other than 1 mm the causes' effects are carried over "
+                     "from the 1 mm layers they were simulated for (an approximation away "
+                     "from 1 mm, docs/geometry.md); --solve-rays solves them at each skin's "
+                     "layers.")
     if layered:
-        notes.append("Layers other than 1 mm: the neo-Hookean curves are read off the geometry "
-                     "space (rays solved on demand where it cannot answer).")
+        notes.append("Layers given or other than 1 mm: the neo-Hookean curves are read off "
+                     "the geometry space (rays solved on demand where it cannot answer); a "
+                     "given thickness's sd is a nuisance parameter of every interval.")
     err = rows[rows["error"].notna()]
     if len(err):
         notes.append(f"{len(err)} predictions failed (see predictions.csv, column error): "
