@@ -153,9 +153,10 @@ def _notes(rows, layered, solve_rays, causes) -> list:
     beyond = rows[rows["beyond_space"].fillna(False).astype(bool)]
     if len(beyond):
         per = beyond.groupby("design").size()
+        where = ", ".join(f"{n} skins with {d}" for d, n in per.items())
         notes.append("BEYOND THE SPACE: the ramp leaves the simulated space (p/X1d above its "
-                     "load range, or the rays stop before its top) for " + ", ".join(f"{n} skins with {d}" for d, n in per.items())
-                     + "; counted as open (no interval).")
+                     f"load range, or the rays stop before its top) for {where}; counted as "
+                     "open (no interval).")
     if layered and causes and not solve_rays:
         notes.append("At layers given or other than 1 mm the causes' effects are carried over "
                      "from the 1 mm layers they were simulated for (an approximation away "
