@@ -119,7 +119,8 @@ def predict_skin(skin: dict, design: Design, spaces: dict, settings, *, causes=(
     -------
     dict
         ``design``, ``skin``, ``beyond_space`` (the ramp leaves the space: p/X1d
-        above its load range, or the rays stop before its top), ``notes``; ``<P>_halfwidth`` and ``<P>_bounded`` for
+        above its load range, or the rays stop before its top), ``notes``;
+        ``<P>_halfwidth`` and ``<P>_bounded`` for
         X1d, X1h; per cause ``<c>_detectable``, ``<c>_nh_chi2``,
         ``<c>_halfwidth``, ``<c>_bounded`` and ``<c>_vs_<r>_gap``.
     """

@@ -25,7 +25,8 @@ def summarize(rows: pd.DataFrame, designs: list, causes=(), quantile: float = 0.
     """One row per design: precision, bounded fractions, detectability, ceilings.
 
     ``<P>_median``, ``<P>_quantile``: the median and the ``quantile`` (default the
-    90th percentile) over the skins of the relative half-width of P's 95 % interval (inf where open or beyond the space);
+    90th percentile) over the skins of the relative half-width of P's 95 % interval
+    (inf where open or beyond the space);
     ``<P>_bounded``: the fraction of skins with both ends inside the space;
     ``<c>_detectable``: the fraction where cause c is detectable;
     ``<c>_median``: its parameter's median half-width over those;
@@ -68,7 +69,8 @@ def _shortfalls(row, question: Question) -> list:
         w = row.get(f"{p}_quantile", math.nan)
         if p not in PARAMETERS:  # a cause's parameter: its median over the detectable skins
             w = row.get(f"{p}_median", math.nan)
-        out.append((f"{p} ±{100 * target:g} %", (w / target - 1.0) if np.isfinite(w) else math.inf))
+        short = (w / target - 1.0) if np.isfinite(w) else math.inf
+        out.append((f"{p} ±{100 * target:g} %", short))
     for a in question.tell:
         for b in question.tell:
             if a == b:
@@ -128,8 +130,10 @@ def design_markdown(summary: pd.DataFrame, question: Question, choice: dict, cau
     else:
         lines.append(f"**No design meets the question.** The best offered: "
                      f"**{choice['design']}**; what it misses:")
-    lines += [""] + [f"- {k}: {'met' if s <= 0 else ('not reached' if not np.isfinite(s) else f'short by {s:.3g}')}"
-                     for k, s in choice["criteria"].items()] + [""]
+    def status(s):
+        return "met" if s <= 0 else ("not reached" if not np.isfinite(s) else f"short by {s:.3g}")
+
+    lines += [""] + [f"- {k}: {status(s)}" for k, s in choice["criteria"].items()] + [""]
     pct = f"{100 * question.quantile:g}th pct"
     head = ["design", "beyond the space"] + [f"{p}: median, {pct}, bounded"
                                              for p in PARAMETERS]
