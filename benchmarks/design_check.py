@@ -15,8 +15,9 @@ curves, as a user runs it). Prints per design, predicted against realised:
 * the median 95 % half-width of X1d and X1h (the realised one: the diagnosis's
   neo-Hookean intervals) and the fraction of skins bounded (with the binomial sd);
 * per cause, the detectable fraction against the fraction where the diagnosis
-  found a cause, and the mean attribution ceiling against the fraction named
-  right (or tied), over the skins predicted detectable.
+  found a cause, and the mean attribution ceiling (against the nearest of every
+  cause the diagnosis weighs) against the fraction named right, over the skins
+  predicted detectable; also right or tied, and wrong and not tied.
 
 Asserts nothing; writes every row to benchmarks/out/design_check.csv.
 """
@@ -144,11 +145,13 @@ def summary(df: pd.DataFrame) -> list:
             if len(on):
                 gaps = on[[col for col in on if col.startswith(f"pred_{c}_vs_")]]
                 ceiling = attribution_ceiling(gaps.min(axis=1).astype(float)).mean()
-                right = ((on[f"real_{c}_cause"] == c)
-                         | on[f"real_{c}_tied"].fillna("").str.contains(c)).mean()
+                named = on[f"real_{c}_cause"] == c
+                tied = on[f"real_{c}_tied"].fillna("").astype(str).str.len() > 0
                 lines.append(f"    over the {len(on)} predicted detectable: ceiling "
-                             f"{ceiling:.2f}, named right or tied {right:.2f} "
-                             f"(sd {_binom(ceiling, len(on)):.2f})")
+                             f"{ceiling:.2f}, named right {named.mean():.2f} "
+                             f"(sd {_binom(ceiling, len(on)):.2f}); right or tied "
+                             f"{(named | tied).mean():.2f}, wrong and not tied "
+                             f"{(~named & ~tied).mean():.2f}")
     return lines
 
 

@@ -107,7 +107,8 @@ def predict_skin(skin: dict, design: Design, spaces: dict, settings, *, causes=(
         ``delta_bic``, ``model_error_um``, ``level``, ``window_focusing``.
     causes : iterable of str
         The causes to add one at a time (detectability, their parameter's
-        interval, the ceiling against each other one).
+        interval, the ceiling against every other cause of the space: the
+        diagnosis's candidates, whether asked about or not).
     on_demand : skinsuction.space.OnDemandRays, optional
         For layers other than the paper's 1 mm (read off the geometry space).
     solve_rays : bool
@@ -122,7 +123,7 @@ def predict_skin(skin: dict, design: Design, spaces: dict, settings, *, causes=(
         above its load range, or the rays stop before its top), ``notes``;
         ``<P>_halfwidth`` and ``<P>_bounded`` for
         X1d, X1h; per cause ``<c>_detectable``, ``<c>_nh_chi2``,
-        ``<c>_halfwidth``, ``<c>_bounded`` and ``<c>_vs_<r>_gap``.
+        ``<c>_halfwidth``, ``<c>_bounded`` and ``<c>_vs_<r>_gap`` for every rival r.
     """
     from skinsuction.space import spaces_at
 
@@ -135,7 +136,9 @@ def predict_skin(skin: dict, design: Design, spaces: dict, settings, *, causes=(
                         f"beyond the space's load range (p/X1d <= {spec.load_max:g})")
         return row
     geometry = _geometry(skin, design)
-    chosen = {k: v for k, v in spaces.items() if k == BASELINE or k in causes}
+    # every cause of the space is a rival (the diagnosis weighs them all); the asked
+    # ones are also added to the skin
+    chosen = spaces if causes else {BASELINE: spaces[BASELINE]}
     sp, notes = spaces_at(chosen, design.probes_mm, geometry, on_demand,
                           solve_causes=solve_rays)
     row["notes"] = "; ".join(notes)
