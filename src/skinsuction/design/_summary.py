@@ -30,6 +30,8 @@ def summarize(rows: pd.DataFrame, designs: list, causes=(), quantile: float = 0.
     ``<P>_bounded``: the fraction of skins with both ends inside the space;
     ``<c>_detectable``: the fraction where cause c is detectable;
     ``<c>_median``: its parameter's median half-width over those;
+    ``<c>_ceiling``: its mean attribution ceiling against the nearest of every cause
+    the diagnosis weighs;
     ``<c>_vs_<r>_ceiling``: the mean attribution ceiling of c against r over them.
     """
     out = []
@@ -53,6 +55,11 @@ def summarize(rows: pd.DataFrame, designs: list, causes=(), quantile: float = 0.
             on = g[det.fillna(False).astype(bool)]
             r[f"{c}_detectable"] = float(det.fillna(False).astype(bool).mean())
             r[f"{c}_median"] = float(on[f"{c}_halfwidth"].median()) if len(on) else math.nan
+            # against the nearest of every cause the diagnosis weighs: the bound on
+            # naming it at all
+            gaps = on[[col for col in on if col.startswith(f"{c}_vs_") and col.endswith("_gap")]]
+            r[f"{c}_ceiling"] = (float(_ceiling(gaps.min(axis=1).astype(float)).mean())
+                                 if len(on) and gaps.shape[1] else math.nan)
             for rival in causes:
                 col = f"{c}_vs_{rival}_gap"
                 if rival != c and col in on:
@@ -137,7 +144,7 @@ def design_markdown(summary: pd.DataFrame, question: Question, choice: dict, cau
     pct = f"{100 * question.quantile:g}th pct"
     head = ["design", "beyond the space"] + [f"{p}: median, {pct}, bounded"
                                              for p in PARAMETERS]
-    head += [f"{c}: detectable" for c in causes]
+    head += [f"{c}: detectable, ceiling (nearest rival)" for c in causes]
     pairs = [(a, b) for a in causes for b in causes if a != b]
     head += [f"ceiling {a} vs {b}" for a, b in pairs]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -146,7 +153,9 @@ def design_markdown(summary: pd.DataFrame, question: Question, choice: dict, cau
         cells += [f"{_fmt(r[f'{p}_median'])}, {_fmt(r[f'{p}_quantile'])}, "
                   f"{100 * r[f'{p}_bounded']:.0f} %" for p in PARAMETERS]
         cells += ["–" if not np.isfinite(r.get(f"{c}_detectable", math.nan))
-                  else f"{100 * r[f'{c}_detectable']:.0f} %" for c in causes]
+                  else f"{100 * r[f'{c}_detectable']:.0f} %, "
+                  + ("–" if not np.isfinite(r.get(f"{c}_ceiling", math.nan))
+                     else f"{100 * r[f'{c}_ceiling']:.0f} %") for c in causes]
         cells += [("–" if not np.isfinite(r.get(f"{a}_vs_{b}_ceiling", math.nan))
                    else f"{100 * r[f'{a}_vs_{b}_ceiling']:.0f} %") for a, b in pairs]
         lines.append("| " + " | ".join(cells) + " |")
