@@ -169,3 +169,42 @@ def test_the_command_writes_the_table_the_figure_and_the_recommendation(tmp_path
         assert (out / f).stat().st_size > 100, f
     assert main(["design", "--out", str(out), "--precision", "X1h"]) == 2  # no =FRACTION
     assert "expected NAME=VALUE, got 'X1h'" in capsys.readouterr().err
+
+
+def test_a_given_thickness_s_sd_is_predicted_as_noisy_fits_see_it(spaces):
+    """The dermis given with sd 0.1 mm (a nuisance of every interval, its rays read off
+    the geometry space): the predicted half-widths against 20 noisy measurements fitted
+    with the same nuisance, as `identify` with the layers given does."""
+    from skinsuction.space import Geometry, OnDemandRays, spaces_at
+
+    settings = Settings()
+    design = Design((2.0, 6.0), 100.0, noise_um=2.0, resolution_mm=0.01, given={"t_d": 0.1})
+    skin = _skin()
+    solver = OnDemandRays(spaces["neo_hookean"].spec, progress=None)
+    pred = predict_skin(skin, design, spaces, settings, on_demand=solver)
+    at, _ = spaces_at({"neo_hookean": spaces["neo_hookean"]}, design.probes_mm,
+                      Geometry(1.0, 1.0, given=("t_d",), sd={"t_d": 0.1}), solver)
+    base = at["neo_hookean"]
+    p = design.pressures()
+    sigma = design.sigma_um(settings.model_error_um)
+    blank = {q: FitData(q, p, np.zeros_like(p), sigma) for q in design.probes_mm}
+    model = ModelCurves(base, blank)
+    assert model.d == 3  # X1d, X1h/X1d and the dermis's offset in sd units
+    theta = np.array([math.log10(skin["x1d_mpa"]), math.log10(skin["x1h_ratio"]), 0.0])
+    clean = model(theta[None])
+    rng = np.random.default_rng(11)
+    widths = {"X1d": [], "X1h": []}
+    for _ in range(20):
+        fd = {q: FitData(q, p, np.round(clean[q][0] + rng.normal(0, 2e-3, p.size), 2), sigma)
+              for q in design.probes_mm}
+        f = fit_model(base, fd, seed=0, repeats=1)
+        iv = fit_intervals(base, fd, f.theta).parameters
+        for k in widths:
+            est = f.parameters[k]
+            widths[k].append(max(iv[k].upper / est - 1, 1 - iv[k].lower / est))
+    for k in widths:
+        ratio = np.median(widths[k]) / pred[f"{k}_halfwidth"]
+        assert 0.8 < ratio < 1.25, (k, ratio)
+    # the thickness's sd, not the noise, sets X1d's interval here
+    plain = predict_skin(skin, Design((2.0, 6.0), 100.0), spaces, settings)
+    assert pred["X1d_halfwidth"] > 3 * plain["X1d_halfwidth"]
