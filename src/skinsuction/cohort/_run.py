@@ -35,32 +35,25 @@ def run_study(path, out_dir, *, space_dir=None,
         A folder of measured CSVs or one long CSV (see the module docstring).
     out_dir : path-like
         Output folder (``curves.parquet``, ``comparison.csv``, ``summary.md``,
-        figures, ``study.json`` with the settings and versions).
+        figures, ``study.json``).
     space_dir : path-like, optional
-        The scale-free simulated space.  Default: the workflow's build in
-        ``results/simulated_space/scale_free`` of the working directory if there
-        is one, else the default space shipped with skinsuction
-        (:func:`skinsuction.space.resolve_space`); ``study.json`` (``space_source``,
-        ``space_description``) and ``summary.md`` say which.
+        The scale-free space (default: :func:`skinsuction.space.resolve_space`, the
+        workflow's build or the shipped one; ``study.json`` and ``summary.md`` say which).
     diagnose : bool
         Diagnose every measurement too (slower: seconds each).
     repeats, seed, level :
         Window focusing runs per identification, the study's seed (measurement
         ``i`` uses ``seed + i``), the confidence level of the intervals.
     workers : int
-        Processes (each measurement is independent).
+        Processes.
     reports : bool
         Also write the identification and diagnosis files of each measurement.
     space, ray_spaces : optional
         A :class:`skinsuction.space.LoadedSpace` and the ray spaces
         ``{name: RaySpace}`` instead of reading ``space_dir`` (tests, notebooks).
     resume : bool
-        Each finished row is kept in ``out_dir/rows.partial.jsonl`` until the
-        study's files are written.  True: a rerun with the same files, space,
-        settings and version takes the rows an earlier run cut short had
-        finished, and analyses only the rest (``resumed`` in the result and in
-        ``study.json``).  False: start afresh.  Rows of other settings are kept
-        aside as ``rows.partial.jsonl.stale``, never reused.
+        Take the rows a run cut short had finished (``out_dir/rows.partial.jsonl``,
+        same files, space, settings and version); False: afresh (docs/studies.md).
 
     Returns
     -------
@@ -107,18 +100,12 @@ def run_study(path, out_dir, *, space_dir=None,
     space, entries = _measurements(path, space_dir, space)
     ray_spaces, pairs, settings = (_diagnosis(space_dir, ray_spaces, diagnosis_settings, level)
                                    if diagnose else (None, None, None))
-    from skinsuction import __version__
-
-    checkpoint = Checkpoint(out / CHECKPOINT_FILE, {
-        "space": str(space_dir), "space_sha256": space.info.get("sha256"),
-        "ray_spaces": sorted(ray_spaces or ()), "pairs": sorted(pairs or ()),
-        "settings": settings.__dict__ if settings is not None else None,
-        "repeats": int(repeats), "seed": int(seed), "level": float(level),
-        "reports": bool(reports), "version": __version__}, resume=resume)
-    if progress is not False and (checkpoint.resumed or checkpoint.stale):
-        print(f"study: {checkpoint.resumed} finished measurements taken from {checkpoint.path}"
-              + (f"; rows of other settings kept aside in {checkpoint.stale}"
-                 if checkpoint.stale else ""), file=sys.stderr)
+    checkpoint = _checkpoint(out, resume, progress, space=str(space_dir),
+                             space_sha256=space.info.get("sha256"),
+                             ray_spaces=sorted(ray_spaces or ()), pairs=sorted(pairs or ()),
+                             settings=settings.__dict__ if settings is not None else None,
+                             repeats=int(repeats), seed=int(seed), level=float(level),
+                             reports=bool(reports))
     with checkpoint:
         rows = study_rows(entries, space=space, ray_spaces=ray_spaces, settings=settings,
                           pair_spaces=pairs, repeats=repeats, seed=seed, level=level,
@@ -131,17 +118,35 @@ def run_study(path, out_dir, *, space_dir=None,
                    df, seconds, diagnose=diagnose, repeats=repeats, seed=seed, level=level,
                    workers=workers)
     meta["resumed"] = checkpoint.resumed
+    paths = _write(out, df, id_cols, comparison, notes, meta, figures)
+    checkpoint.remove()  # every row is in the study's files now
+    return {"paths": paths, "space": space_text(meta, markdown=False),
+            "measurements": int(len(df)), "errors": meta["errors"], "seconds": seconds,
+            "comparison": comparison, "resumed": checkpoint.resumed, "notes": notes}
+
+
+def _write(out, df, id_cols, comparison, notes, meta, figures: bool) -> dict:
+    """The study's files (and figures): name -> path."""
     paths = write_study_files(out, df, id_cols, comparison, notes, meta)
-    checkpoint.remove()
     if figures:
         from skinsuction.figures.cohort import write_study_figures
 
         paths.update(write_study_figures(df, out))
-    return {"paths": {k: str(v) for k, v in paths.items()},
-            "space": space_text(meta, markdown=False), "measurements": int(len(df)),
-            "errors": meta["errors"], "seconds": seconds, "comparison": comparison,
-            "resumed": checkpoint.resumed,
-            "notes": notes}
+    return {k: str(v) for k, v in paths.items()}
+
+
+def _checkpoint(out, resume, progress, **fingerprint) -> Checkpoint:
+    """The study's kept rows (:class:`Checkpoint`), said aloud when some are reused or set
+    aside; the fingerprint is what the rows depend on, with the package's version."""
+    from skinsuction import __version__
+
+    checkpoint = Checkpoint(out / CHECKPOINT_FILE, {**fingerprint, "version": __version__},
+                            resume=resume)
+    if progress is not False and (checkpoint.resumed or checkpoint.stale):
+        print(f"study: {checkpoint.resumed} finished measurements taken from {checkpoint.path}"
+              + (f"; rows of other settings kept aside in {checkpoint.stale}"
+                 if checkpoint.stale else ""), file=sys.stderr)
+    return checkpoint
 
 
 def _which_space(space_dir, space, need_dir: bool) -> tuple:
