@@ -44,10 +44,8 @@ def run_study(path, out_dir, *, space_dir=None,
     repeats, seed, level :
         Window focusing runs per identification, the study's seed (measurement
         ``i`` uses ``seed + i``), the confidence level of the intervals.
-    workers : int
-        Processes.
-    reports : bool
-        Also write the identification and diagnosis files of each measurement.
+    workers, reports :
+        Processes; also write each measurement's identification and diagnosis files.
     space, ray_spaces : optional
         A :class:`skinsuction.space.LoadedSpace` and the ray spaces
         ``{name: RaySpace}`` instead of reading ``space_dir`` (tests, notebooks).
