@@ -53,7 +53,8 @@ def _one(args):
     if stiff:
         params["x2d"] = stiff * x1d
     t0 = time.process_time()
-    curve, _, info = compute_ray(ray_id(params), spec.pressures_mbar, spec.mesh, spec.fallback)
+    curve, _, info = compute_ray(ray_id(params), spec.pressures_mbar, spec.mesh, spec.fallback,
+                                 spec.fallback_below_mbar)
     reach = float(info["last_converged_mbar"]) / x1d
     stretch = re.search(r"largest principal stretch ([0-9.]+)", info["reason"])
     return {"probe_mm": probe, "x1h_over_x1d": ratio, "x2d_over_x1d": stiff,

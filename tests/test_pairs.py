@@ -339,7 +339,7 @@ def test_a_random_shipped_pair_ray_is_reproduced_by_the_fe_code():
                 and solver[r["ray_id"]]["converged"]]
         ray = rays[rng.integers(len(rays))]
         curve, _, _ = compute_ray(ray["ray_id"], spec.pressures_mbar, spec.mesh,
-                                  list(spec.fallback))
+                                  list(spec.fallback), spec.fallback_below_mbar)
         a, b = pair.pair.causes
         j = a.nodes.index(ray["coordinate"]) * len(b.nodes) + b.nodes.index(ray["coordinate2"])
         kept = pair.rays(2.0)[spec.ratio_nodes.index(ray["ratio"]), j]

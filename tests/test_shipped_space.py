@@ -173,7 +173,7 @@ def test_a_random_sample_of_shipped_rays_is_reproduced_by_the_fe_code(provenance
     for ray in chosen:
         t0 = time.perf_counter()
         curve, _, info = compute_ray(ray["ray_id"], spec.pressures_mbar, spec.mesh,
-                                     list(spec.fallback))
+                                     list(spec.fallback), spec.fallback_below_mbar)
         fresh = np.asarray(curve.deflection_mm, dtype=float)
         i = spec.ratio_nodes.index(ray["ratio"])
         kept = shipped.rays(RAY_PROBE_MM)[i, 0]

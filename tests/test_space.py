@@ -441,6 +441,20 @@ def test_no_fallback_solve_where_the_first_converges(tmp_path, stopping_model):
     assert len(calls) == 1 and frame["converged"].all() and not frame["mesh_fallback"].any()
 
 
+def test_in_the_load_tail_a_stop_is_kept_without_a_fallback_solve(stopping_model):
+    """A ray that stops at or beyond ``fallback_below_mbar`` (the tail's start) keeps
+    its stop; one that stops before it still gets the fallback."""
+    from skinsuction.space import solve_with_fallbacks
+
+    calls, _ = stopping_model
+    params = dict(x1d=0.001, x1h=1e-5, probe_mm=6.0, bottom="fixed")
+    p = np.asarray(PRESSURES, dtype=float)
+    curve, kept, _ = solve_with_fallbacks(params, p, {}, FALLBACK, fallback_below_mbar=40.0)
+    assert len(calls) == 1 and kept == 0 and curve.last_converged_mbar == 40.0
+    curve, kept, _ = solve_with_fallbacks(params, p, {}, FALLBACK, fallback_below_mbar=50.0)
+    assert len(calls) == 3 and kept == 1 and curve.converged
+
+
 def test_splice_keeps_the_first_solve_and_joins_the_fallback_continuously(monkeypatch):
     from skinsuction.space import solve_with_fallbacks
 

@@ -11,6 +11,7 @@ with job(snakemake.log[0], threads=snakemake.threads):
         pressures_mbar=snakemake.params.pressures,
         mesh=dict(snakemake.params.mesh),
         fallback=[dict(f) for f in snakemake.params.fallback],
+        fallback_below_mbar=getattr(snakemake.params, "fallback_below", None),
         metadata={"bundle_id": getattr(snakemake.params, "bundle", None)
                   or snakemake.wildcards.bundle,
                   "source_hash": {"model": snakemake.params.code}},

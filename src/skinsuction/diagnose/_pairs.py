@@ -36,6 +36,22 @@ def _usable_pairs(run: Run, pairs: dict, parent: str, fitted: dict) -> list:
             and all(space.has_probe(p) for p in run.probes)]
 
 
+def _within_reach(run: Run, usable: list, parent_fit) -> tuple:
+    """The pairs whose load reaches this curve at the parent's X1d, and why none does.
+
+    Pair spaces built before the singles' load tail stop at its start (2·10⁴
+    mbar/MPa): a curve beyond it gets no second effect, and the report says so."""
+    p_max = max(float(d.pressure_mbar.max()) for d in run.fd.values())
+    x1d = float(parent_fit.parameters["X1d"])
+    kept = [(n, s) for n, s in usable if p_max / x1d <= s.spec.load_max * (1 + 1e-9)]
+    if kept:
+        return kept, None
+    reach = max(s.spec.load_max for _, s in usable)
+    return [], (f"the pair spaces reach p/X1d <= {reach:g} mbar/MPa and this curve needs "
+                f"{p_max / x1d:.0f} at the single cause's X1d = {x1d:.4g} MPa: no second "
+                "effect is tried (rebuild them: snakemake --cores 2 scale_free_pairs)")
+
+
 def _starts(space, fits: dict):
     """The pair at each of its causes' own fits, the other cause at its neutral value."""
     first, second = space.pair.causes
@@ -112,6 +128,9 @@ def second_effect(run: Run, candidates: list, fits: dict, pairs: dict) -> dict:
     if not usable:
         return {**_not_taken(f"no pair space holds {parent} with another fitted cause at "
                              "these probes"), "parent": parent}
+    usable, short = _within_reach(run, usable, fits[parent])
+    if short:
+        return {**_not_taken(short), "parent": parent}
     options, pair_fits = [], {}
     for name, space in usable:
         opt, pair_fits[name] = _option(run, name, space, fits, by_cause, parent)

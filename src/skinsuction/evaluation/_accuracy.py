@@ -54,14 +54,15 @@ class AccuracyPoint:
 
 
 def draw_points(spaces: dict, n: int, seed=0, x1d_range=(0.005, 0.15),
-                coordinate_range=None) -> list:
+                coordinate_range=None, protocols=PROTOCOLS) -> list:
     """``n`` random :class:`AccuracyPoint` across the spaces' whole domain.
 
     The model is drawn evenly among ``spaces``; X1h/X1d log-uniform over the
     ratio nodes, the cause's axis coordinate uniform over its nodes' span (or over
     ``coordinate_range``, (lo, hi) in the cause's coordinate, e.g. lambda0 1-1.1);
-    the protocol among :data:`PROTOCOLS`; X1d log-uniform in ``x1d_range`` raised
-    to the load reach ``p_max / load_max``.
+    the protocol among ``protocols`` ((p_max, step) in mbar, default
+    :data:`PROTOCOLS`); X1d log-uniform in ``x1d_range`` raised to the load reach
+    ``p_max / load_max``.
     """
     rng = np.random.default_rng(seed)
     names = sorted(spaces)
@@ -80,7 +81,7 @@ def draw_points(spaces: dict, n: int, seed=0, x1d_range=(0.005, 0.15),
             if coordinate_range is not None:
                 lo_u, hi_u = (s.cause.to_axis(c) for c in coordinate_range)
             coord = float(s.cause.from_axis(rng.uniform(lo_u, hi_u)))
-        p_max, p_step = PROTOCOLS[rng.integers(len(PROTOCOLS))]
+        p_max, p_step = protocols[rng.integers(len(protocols))]
         lo = max(x1d_range[0], p_max / spec.load_max)
         hi = max(lo * 1.0001, x1d_range[1])
         x1d = 10.0 ** rng.uniform(math.log10(lo), math.log10(hi))

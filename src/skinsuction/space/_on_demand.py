@@ -124,7 +124,8 @@ class OnDemandRays:
     ----------
     spec : RaySpec
         The ray specification of the space they extend (ratio nodes, loads, mesh,
-        fallbacks): the rays are those the workflow would have run.
+        fallbacks): the rays are those the workflow would have run, without its
+        load tail (:meth:`RaySpec.untailed`, as the geometry spaces).
     cache_dir : path-like, optional
         Default :func:`default_cache_dir`; a subfolder per specification and FE code.
     workers : int
@@ -155,6 +156,9 @@ class OnDemandRays:
         import json
         import sys
 
+        # a subject's rays stop where the load tail starts, as the geometry spaces'
+        # do: at_bound (edge coverage) says so where a fit needs more
+        spec = spec.untailed()
         self.spec = spec
         self.workers = max(1, int(workers))
         self.progress = sys.stderr if progress == "stderr" else progress

@@ -28,7 +28,8 @@ __all__ = ["compute_ray", "compute_bundle", "build_ray_spaces"]
 
 
 # ---------------------------------------------------------------------- FE rays
-def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=None):
+def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=None,
+                fallback_below_mbar: float | None = None):
     """Run the FE model (and its fallbacks) for the ray ``rid``.
 
     One solve runs every pressure, the onset loads near 0 included (see
@@ -47,6 +48,9 @@ def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=Non
     fallback : dict or list of dict, optional
         Fallback meshes (:func:`skinsuction.space.solve_with_fallbacks`); a
         fallback's curve is spliced on where the first solve stopped.
+    fallback_below_mbar : float, optional
+        The fallbacks run only for a solve that stopped below this pressure
+        (:attr:`RaySpec.fallback_below_mbar`).
 
     Returns
     -------
@@ -62,7 +66,8 @@ def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=Non
     axes = {k: params[k] for k in AXES}
     pressures = np.asarray(pressures_mbar, dtype=float)
     curve, kept, first_reason = solve_with_fallbacks({**axes, **extras}, pressures, mesh,
-                                                     fallback, label=f"ray {rid}", splice=True)
+                                                     fallback, label=f"ray {rid}", splice=True,
+                                                     fallback_below_mbar=fallback_below_mbar)
     frame = curve_frame(curve, axes)
     for k in EXTRA_KEYWORDS:
         frame[k] = float(params[k])
@@ -77,7 +82,7 @@ def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=Non
 
 
 def compute_bundle(ray_ids, path, pressures_mbar, mesh: dict | None = None, fallback=None,
-                   metadata=None) -> dict:
+                   metadata=None, fallback_below_mbar: float | None = None) -> dict:
     """Run the rays of one bundle and write them to one file (atomic Parquet).
 
     The adapter of the workflow's ``simulate_ray_bundle`` rule.  A ray that stops
@@ -98,6 +103,8 @@ def compute_bundle(ray_ids, path, pressures_mbar, mesh: dict | None = None, fall
         Fallback meshes.
     metadata : dict, optional
         Extra provenance for the file.
+    fallback_below_mbar : float, optional
+        See :func:`compute_ray`.
 
     Returns
     -------
@@ -108,10 +115,11 @@ def compute_bundle(ray_ids, path, pressures_mbar, mesh: dict | None = None, fall
 
     frames, infos = [], {}
     for rid in ray_ids:
-        _, frame, info = compute_ray(rid, pressures_mbar, mesh, fallback)
+        _, frame, info = compute_ray(rid, pressures_mbar, mesh, fallback, fallback_below_mbar)
         frames.append(frame)
         infos[rid] = info
-    meta = {"rays": infos, "mesh": mesh, "mesh_fallback": fallback, "provenance": collect(),
+    meta = {"rays": infos, "mesh": mesh, "mesh_fallback": fallback,
+            "fallback_below_mbar": fallback_below_mbar, "provenance": collect(),
             **(metadata or {})}
     _write_parquet(pd.concat(frames, ignore_index=True), path, meta)
     return infos
@@ -156,7 +164,7 @@ def build_ray_spaces(spec: RaySpec, causes: dict, out_dir=None, workers: int = 1
     (out / "rays").mkdir(parents=True, exist_ok=True)
     bundles = ray_bundles(spec, causes)
     jobs = [(ids, str(out / "rays" / f"{bid}.parquet"), spec.pressures_mbar, spec.mesh,
-             list(spec.fallback))
+             list(spec.fallback), spec.fallback_below_mbar)
             for bid, ids in bundles.items() if not (out / "rays" / f"{bid}.parquet").exists()]
     # minutes to hours: a bar on a terminal, a line every 10 s in a log
     bar = Progress(len(jobs), "rays", "bundles", stream=progress, quiet_below=2.0)
@@ -180,6 +188,6 @@ def build_ray_spaces(spec: RaySpec, causes: dict, out_dir=None, workers: int = 1
 
 
 def _compute_bundle_job(job):
-    ids, path, pressures, mesh, fallback = job
-    compute_bundle(ids, path, pressures, mesh, fallback)
+    ids, path, pressures, mesh, fallback, below = job
+    compute_bundle(ids, path, pressures, mesh, fallback, fallback_below_mbar=below)
     return path

@@ -131,6 +131,14 @@ class RaySpec:
         ``p_max`` reaches X1d down to ``p_max / load_max``.
     load_steps : int
         Load steps of a ray.
+    load_tail_from : float
+        Where the tail starts (mbar/MPa; 0: no tail).  With a tail the
+        ``load_steps`` even steps end there and ``load_tail_steps`` steps spaced
+        evenly in log q run on to ``load_max``: M(q) is smooth at large loads, so
+        a 500 mbar reach on soft skin costs 16 nodes, not 120 even ones (a
+        cubic read within 0.13 %, ``docs/scale_free_space.md``).
+    load_tail_steps : int
+        Steps of the tail (0: none).
     load_refine : int
         Extra load nodes near 0: the first step halved ``load_refine`` times
         (``load_max / load_steps / 2**k``).  A strongly stiffening dermis bends M(p)
@@ -161,6 +169,8 @@ class RaySpec:
     bottom: str = "fixed"
     mesh: dict = field(default_factory=dict)
     fallback: tuple = ()
+    load_tail_from: float = 0.0
+    load_tail_steps: int = 0
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -183,6 +193,15 @@ class RaySpec:
             raise ValueError(f"load_refine must be a whole number in 0..10, got "
                              f"{self.load_refine}")
         set_(self, "load_refine", int(self.load_refine))
+        tail_from, tail_steps = float(self.load_tail_from), int(self.load_tail_steps)
+        if tail_steps != self.load_tail_steps or tail_steps < 0 or (
+                tail_steps and not 0 < tail_from < self.load_max) or (
+                not tail_steps and tail_from):
+            raise ValueError(f"the load tail needs steps >= 1 from 0 < from < load_max "
+                             f"({self.load_max:g}), got from {self.load_tail_from}, steps "
+                             f"{self.load_tail_steps}")
+        set_(self, "load_tail_from", tail_from)
+        set_(self, "load_tail_steps", tail_steps)
         if not float(self.x1d_ref) > 0:
             raise ValueError(f"x1d_ref must be positive, got {self.x1d_ref}")
         set_(self, "x1d_ref", float(self.x1d_ref))
@@ -194,13 +213,44 @@ class RaySpec:
     @property
     def load_nodes(self) -> np.ndarray:
         """The loads p / X1d of a ray (mbar/MPa)."""
-        even = np.linspace(0.0, self.load_max, self.load_steps + 1)
-        return np.unique(np.concatenate([even, self.onset_loads]))
+        even = np.linspace(0.0, self.even_max, self.load_steps + 1)
+        tail = self.even_max * (self.load_max / self.even_max) ** (
+            np.arange(1, self.load_tail_steps + 1) / max(self.load_tail_steps, 1))
+        return np.unique(np.concatenate([even, tail, self.onset_loads]))
+
+    @property
+    def even_max(self) -> float:
+        """Where the even load steps end: the tail's start, else ``load_max``."""
+        return self.load_tail_from if self.load_tail_steps else self.load_max
+
+    @property
+    def fallback_below_mbar(self) -> float | None:
+        """The fallback meshes run for a ray that stops below this pressure (at
+        ``x1d_ref``): the tail's start, None without a tail.  In the tail only
+        neo-Hookean skins stop (stretches of 4-13, no skin's), and a fallback
+        solve from 0 would double those rays' cost for a few per cent more load."""
+        return self.even_max * self.x1d_ref if self.load_tail_steps else None
+
+    def untailed(self) -> "RaySpec":
+        """The same rays without the tail, to its start (the geometry spaces' rays).
+
+        Examples
+        --------
+        >>> spec = RaySpec([2], [0.01, 1.0], load_max=71400, load_steps=48,
+        ...                load_tail_from=20000, load_tail_steps=16)
+        >>> len(spec.load_nodes), spec.untailed().load_max, len(spec.untailed().load_nodes)
+        (65, 20000.0, 49)
+        """
+        from dataclasses import replace
+        if not self.load_tail_steps:
+            return self
+        return replace(self, load_max=self.load_tail_from, load_tail_from=0.0,
+                       load_tail_steps=0)
 
     @property
     def onset_loads(self) -> np.ndarray:
         """The extra loads near 0 (ascending): the onset."""
-        first = self.load_max / self.load_steps
+        first = self.even_max / self.load_steps
         return first * 2.0 ** -np.arange(self.load_refine, 0, -1)
 
     @property
@@ -265,6 +315,8 @@ class RaySpec:
             load_max=load["max"],
             load_steps=load.get("steps", 40),
             load_refine=load.get("refine", 0),
+            load_tail_from=(load.get("tail") or {}).get("from", 0.0),
+            load_tail_steps=(load.get("tail") or {}).get("steps", 0),
             x1d_range=(section["x1d_mpa"]["min"], section["x1d_mpa"]["max"]),
             x1d_ref=section.get("x1d_ref", 0.01),
             bottom=section.get("bottom", "fixed"),
@@ -284,7 +336,10 @@ class RaySpec:
                 "load_refine": self.load_refine,
                 "x1d_range": list(self.x1d_range), "x1d_ref": self.x1d_ref,
                 "bottom": self.bottom, "mesh": dict(self.mesh),
-                "fallback": [dict(f) for f in self.fallback]}
+                "fallback": [dict(f) for f in self.fallback],
+                # only with a tail: the specifications of spaces built before it read alike
+                **({"load_tail_from": self.load_tail_from,
+                    "load_tail_steps": self.load_tail_steps} if self.load_tail_steps else {})}
 
 
 def _ray_params(spec: RaySpec, probe: float, ratio: float, cause: Cause | None, coord,

@@ -30,7 +30,9 @@ def pairs_for(space_dir, spec: RaySpec) -> dict:
 
     Those of ``space_dir``'s ``pairs/`` folder, else those shipped with the package
     (a workflow build of the single causes that did not build the pairs, target
-    ``scale_free_pairs``); only pairs built with the same ray specification.
+    ``scale_free_pairs``); only pairs built with the same ray specification, or,
+    where there are none, with the same rays up to the start of its load tail
+    (pairs built before the tail: the diagnosis tries them only within their reach).
 
     Parameters
     ----------
@@ -44,10 +46,11 @@ def pairs_for(space_dir, spec: RaySpec) -> dict:
         ``{name: PairRaySpace}``, possibly empty.
     """
     for folder in ([Path(space_dir)] if space_dir is not None else []) + [SHIPPED_SPACE_DIR]:
-        found = {n: s for n, s in read_pair_spaces(folder).items()
-                 if s.spec.to_dict() == spec.to_dict()}
-        if found:
-            return found
+        pairs = read_pair_spaces(folder)
+        for want in (spec, spec.untailed()):
+            found = {n: s for n, s in pairs.items() if s.spec.to_dict() == want.to_dict()}
+            if found:
+                return found
     return {}
 
 

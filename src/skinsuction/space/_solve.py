@@ -106,7 +106,8 @@ def _solve_once(params: dict, pressures, settings: dict, label: str, budget=None
 
 
 def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None, fallback=None,
-                         label: str = "model", splice: bool = False):
+                         label: str = "model", splice: bool = False,
+                         fallback_below_mbar: float | None = None):
     """Solve the FE model, then the fallback meshes in order while it stops early.
 
     The chain of :func:`compute_point`, for any model keywords (``params`` are
@@ -141,6 +142,11 @@ def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None,
         Names the solve in the log and in errors.
     splice : bool
         Splice a fallback's curve onto the first solve's (above).
+    fallback_below_mbar : float, optional
+        Run the fallbacks only for a first solve that stopped below this pressure
+        (the rays' load tail, :attr:`RaySpec.fallback_below_mbar`: there only
+        neo-Hookean skins stop, at stretches of 4-13, and a fallback from 0 would
+        double the ray's cost for a few per cent more load).
 
     Returns
     -------
@@ -160,6 +166,8 @@ def solve_with_fallbacks(params: dict, pressures_mbar, mesh: dict | None = None,
     curve = solve(dict(mesh or {}))
     first_reason, kept, spent = None, 0, curve.seconds
     fallbacks = [fallback] if isinstance(fallback, dict) else list(fallback or [])
+    if fallback_below_mbar is not None and _reached(curve) >= fallback_below_mbar:
+        fallbacks = []
     for k, settings in enumerate(fallbacks, start=1):
         if curve.converged:
             break
