@@ -455,6 +455,18 @@ def test_in_the_load_tail_a_stop_is_kept_without_a_fallback_solve(stopping_model
     assert len(calls) == 3 and kept == 1 and curve.converged
 
 
+def test_a_stiffening_ray_that_stops_in_the_tail_still_gets_the_fallback(stopping_model):
+    from skinsuction.space import compute_ray
+
+    calls, _ = stopping_model
+    compute_ray("p6_fixed_x1d0.001_x1h1e-05_x2d0.01_x2h0_td1_th1", PRESSURES, {}, FALLBACK,
+                fallback_below_mbar=40.0)
+    assert len(calls) == 2
+    compute_ray("p6_fixed_x1d0.001_x1h1e-05_x2d0_x2h0_td1_th1", PRESSURES, {}, FALLBACK,
+                fallback_below_mbar=40.0)
+    assert len(calls) == 3
+
+
 def test_splice_keeps_the_first_solve_and_joins_the_fallback_continuously(monkeypatch):
     from skinsuction.space import solve_with_fallbacks
 

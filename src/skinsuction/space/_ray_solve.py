@@ -50,7 +50,9 @@ def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=Non
         fallback's curve is spliced on where the first solve stopped.
     fallback_below_mbar : float, optional
         The fallbacks run only for a solve that stopped below this pressure
-        (:attr:`RaySpec.fallback_below_mbar`).
+        (:attr:`RaySpec.fallback_below_mbar`), but for every ray of a stiffening
+        dermis (X2d > 0): those stop in the tail for the default element, not
+        for want of an equilibrium.
 
     Returns
     -------
@@ -65,6 +67,10 @@ def compute_ray(rid: str, pressures_mbar, mesh: dict | None = None, fallback=Non
     extras = {k: params[k] for k in EXTRA_KEYWORDS if params[k] != EXTRA_KEYWORDS[k]}
     axes = {k: params[k] for k in AXES}
     pressures = np.asarray(pressures_mbar, dtype=float)
+    if params["x2d"] > 0:
+        # a stiffening dermis that stops in the tail stops for the default element (a
+        # soft hypodermis under 4-8 mm): the fallback carries it to 500 mbar on 0.007
+        fallback_below_mbar = None
     curve, kept, first_reason = solve_with_fallbacks({**axes, **extras}, pressures, mesh,
                                                      fallback, label=f"ray {rid}", splice=True,
                                                      fallback_below_mbar=fallback_below_mbar)

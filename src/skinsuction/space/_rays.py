@@ -226,9 +226,11 @@ class RaySpec:
     @property
     def fallback_below_mbar(self) -> float | None:
         """The fallback meshes run for a ray that stops below this pressure (at
-        ``x1d_ref``): the tail's start, None without a tail.  In the tail only
-        neo-Hookean skins stop (stretches of 4-13, no skin's), and a fallback
-        solve from 0 would double those rays' cost for a few per cent more load."""
+        ``x1d_ref``): the tail's start, None without a tail.  In the tail a
+        neo-Hookean dermis stops for want of an equilibrium (stretches of 4-13, no
+        skin's), and a fallback solve from 0 would double those rays' cost for a
+        few per cent more load; a stiffening dermis's rays get the fallback
+        anywhere (:func:`compute_ray`)."""
         return self.even_max * self.x1d_ref if self.load_tail_steps else None
 
     def untailed(self) -> "RaySpec":
