@@ -303,3 +303,20 @@ def test_a_stopped_fe_correction_keeps_the_fast_fit_and_says_so(space, tmp_path,
     assert r["viscoelastic"]["fe_correction"]["applied"] is False
     assert any(w.startswith("FE correction: viscoelastic_creep") and "stopped" in w
                for w in r["warnings"]), r["warnings"]
+
+
+def test_the_face_protocol_in_the_load_tail_gets_creep_and_stiffening(space):
+    """Issue 35's face skin (2 mm, 450 mbar mode 1, X1d 0.018 MPa: p/X1d = 25 000, in the
+    space's load tail; data/make_example_face.py): before the tail X1d sat at the space's
+    edge (450 / 2·10⁴ = 0.0225 MPa) and the verdict was beyond_space."""
+    from pathlib import Path
+
+    data = load_time_curves(Path(__file__).resolve().parents[1] / "data"
+                            / "example_face_mode1.csv")
+    r = diagnose_time_data(data, space, FAST)
+    assert r["effects"] == [VISCOELASTIC_CREEP, STIFF], r["summary"]
+    assert r["verdict"] == "cause_found" and not r["beyond_space"]
+    p, iv = r["final"]["parameters"], r["final"]["intervals"]
+    assert 450.0 / p["X1d"] > 20000.0  # read in the tail
+    assert abs(p["X1d"] / 0.018 - 1) < 0.05
+    assert iv["X2d"]["lower"] <= 0.1 <= iv["X2d"]["upper"]
