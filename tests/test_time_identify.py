@@ -197,9 +197,9 @@ def test_an_elastic_curve_is_not_given_a_spectrum(space, tmp_path):
 
 
 def test_suction_beyond_the_space_is_a_located_error(space, tmp_path):
-    # a space whose reach is 400 mbar (X1d <= 0.02 MPa at p/X1d <= 20 000 mbar/MPa)
+    # a space whose reach is 400 mbar (its largest X1d at p/X1d <= load_max)
     small = dataclasses.replace(space.rays, spec=dataclasses.replace(
-        space.rays.spec, x1d_range=(0.001, 0.02)))
+        space.rays.spec, x1d_range=(0.001, 400.0 / space.rays.spec.load_max)))
     from skinsuction.space import LoadedSpace
 
     narrow = LoadedSpace(space.spaces, space.info, None, space.bottom, small, None, None)
