@@ -57,12 +57,12 @@ def one_draw(job):
     from skinsuction.evaluation import run_draw
     from skinsuction.space import OnDemandRays
 
-    truth, seed, space_dir, settings, cache, domain, ray_cache = job
+    truth, seed, space_dir, settings, cache, domain, ray_cache, solver = job
     spaces = _spaces(space_dir)
     if _SOLVER is None:
         _SOLVER = OnDemandRays(spaces["neo_hookean"].spec, cache_dir=ray_cache)
     return run_draw(truth, seed, spaces, Settings(**settings), cache_dir=cache, domain=domain,
-                    on_demand=_SOLVER)
+                    on_demand=_SOLVER, solver=solver)
 
 
 def main(argv=None):
@@ -77,6 +77,10 @@ def main(argv=None):
     ap.add_argument("--no-space-error", action="store_true",
                     help="leave the space's correlated error out of the diagnosis "
                          "(Settings.space_error=False), for comparison")
+    ap.add_argument("--no-discretisation-error", action="store_true",
+                    help="leave the space's discretisation error out of the correlated term "
+                         "(skinsuction.identify.measured_fit.DISCRETISATION_ERROR_RMS), for "
+                         "comparison")
     ap.add_argument("--pattern-gate", action=argparse.BooleanOptionalAction, default=None,
                     help="name a cause only once the smooth-pattern test fires first "
                          "(Settings.pattern_gate; default: the package's, off); either way "
@@ -99,11 +103,21 @@ def main(argv=None):
                     help="probe pairs drawn evenly (default 2+6,4+8)")
     ap.add_argument("--ray-cache", default="benchmarks/out/on_demand",
                     help="folder of the rays solved on demand")
+    ap.add_argument("--solver", default="space",
+                    help="discretisation or FE code of the virtual experiments: space (the "
+                         "space's own, default), refined, quad9, felupe or calculix "
+                         "(skinsuction.evaluation.OTHER_SOLVERS; CalculiX refuses "
+                         "pre-tension draws)")
     args = ap.parse_args(argv)
 
     from skinsuction.evaluation import UNDIAGNOSED, given_keywords, summarise, under_rule
     from skinsuction.figures.detectability import plot_detectability
 
+    if args.no_discretisation_error:
+        # read at every call, and inherited by the forked workers
+        from skinsuction.identify import _space_error
+
+        _space_error.DISCRETISATION_ERROR = False
     spaces = _spaces(args.space_dir)
     domain = {"probe_pairs": tuple(tuple(float(q) for q in pair.split("+"))
                                    for pair in args.probe_pairs.split(","))}
@@ -121,11 +135,11 @@ def main(argv=None):
         settings["pattern_gate"] = args.pattern_gate
     cache = args.cache or None
     jobs = [(truth, args.seed + 100000 * k + i, args.space_dir, settings, cache, domain,
-             args.ray_cache)
+             args.ray_cache, args.solver)
             for k, truth in enumerate(["none", *causes]) for i in range(args.per_cause)
             if args.truths is None or truth in args.truths]
     print(f"{len(jobs)} virtual experiments ({args.per_cause} per true cause), space "
-          f"{args.space_dir}, {args.workers} worker(s)", flush=True)
+          f"{args.space_dir}, solver {args.solver}, {args.workers} worker(s)", flush=True)
     t0 = time.perf_counter()
     rows = []
     out = Path(args.out)
@@ -177,6 +191,10 @@ def main(argv=None):
               "gate: over its detectable draws")
         print(other["detectable"].to_string())
         print(other["rates"].to_string(index=False, float_format=lambda x: f"{x:.3g}"))
+    from skinsuction.evaluation import interval_coverage
+
+    print("\nCoverage of the 95 % intervals of the model named, over the draws named right:")
+    print(interval_coverage(df).to_string(index=False, float_format=lambda x: f"{x:.3g}"))
     pt = df[(df["truth"] == "pre_tension") & ~df["named"].isin(UNDIAGNOSED)]
     if len(pt):
         print(f"\nInitial in-plane stress of the pre-tension draws: "
@@ -184,8 +202,10 @@ def main(argv=None):
               f"(median {pt['initial_stress_kpa'].median():.2g})")
     for _, r in df[df["named"] == "input_rejected"].iterrows():
         print(f"  input rejected: {r['truth']} seed {r['seed']}: {r['error']}")
+    for _, r in df[df["named"] == "solver_refused"].iterrows():
+        print(f"  solver refused: {r['truth']} seed {r['seed']}: {r['error']}")
     ok = df[~df["named"].isin(UNDIAGNOSED)]
-    solved = df[~df["fe_cached"].astype(bool)]
+    solved = df[~df["fe_cached"].fillna(True).astype(bool)]
     print(f"\nOne diagnosis: median {ok['cpu_seconds'].median():.2f} s CPU "
           f"({ok['wall_seconds'].median():.2f} s wall), max {ok['cpu_seconds'].max():.2f} s CPU; "
           f"FE of one virtual experiment: median {solved['fe_seconds'].median():.1f} s "

@@ -300,7 +300,9 @@ def test_the_space_error_term_is_the_chi2_of_its_covariance_in_every_fit_path():
     # profile (computed here by a dense solve) in the window focusing's objective, the
     # least-squares residuals and the reported fit alike
     from skinsuction.diagnose._fit import ModelCurves, _Objective, evaluate_fit, with_space_error
-    from skinsuction.identify.measured_fit import SPACE_ERROR_LOADS, SPACE_ERROR_RMS
+    from skinsuction.identify.measured_fit import (DISCRETISATION_ERROR_HEIGHTS,
+                                                   DISCRETISATION_ERROR_RMS, SPACE_ERROR_LOADS,
+                                                   SPACE_ERROR_RMS)
 
     spaces = toy_spaces()
     data = _toy_data(0.02, 0.02, None, "none", 1.0, 4, probes=(6.0,))
@@ -311,8 +313,12 @@ def test_the_space_error_term_is_the_chi2_of_its_covariance_in_every_fit_path():
     model = ModelCurves(spaces[BASELINE], weighted)
     fit = evaluate_fit(model, theta, BASELINE)
     r = 1e3 * (fd[6.0].deflection_mm - fit.fitted_mm[6.0])  # µm
-    v = 1e3 * np.interp(fd[6.0].pressure_mbar / 0.02, SPACE_ERROR_LOADS,
-                        SPACE_ERROR_RMS[6.0]) * np.abs(fd[6.0].deflection_mm)
+    # the space's error at each load and the discretisation's at each dome height M/a
+    m = np.abs(fd[6.0].deflection_mm)
+    v = 1e3 * np.hypot(np.interp(fd[6.0].pressure_mbar / 0.02, SPACE_ERROR_LOADS,
+                                 SPACE_ERROR_RMS[6.0]),
+                       np.interp(m / 3.0, DISCRETISATION_ERROR_HEIGHTS,
+                                 DISCRETISATION_ERROR_RMS[6.0])) * m
     dense = float(r @ np.linalg.solve(np.eye(r.size) + np.outer(v, v), r))
     assert fit.chi2 == pytest.approx(dense, rel=1e-10)
     obj = _Objective(model)

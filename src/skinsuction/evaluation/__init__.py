@@ -50,9 +50,11 @@ from ._confusion import (
     draw_wide,
     given_keywords,
     initial_stress_kpa,
+    interval_columns,
     run_draw,
     run_draws,
 )
+from ._solvers import OTHER_SOLVERS, SolverRefused, solver_curves
 from ._effects import (
     EFFECT_CLASSES,
     EFFECT_DESIGNS,
@@ -82,7 +84,8 @@ from ._published import (
     published_ranges_study,
     published_ranges_summary,
 )
-from ._rates import UNDIAGNOSED, attribution_ceiling, summarise, under_rule
+from ._rates import (UNDIAGNOSED, attribution_ceiling, interval_coverage, summarise, under_rule,
+                     wrong_untied)
 from ._layers_study import (
     LayersStudyDesign,
     draw_layers_subject,
@@ -125,8 +128,11 @@ __all__ = [
     "ramp_effects_study", "ramp_effects_summary", "ramp_effects_markdown",
     # the diagnosis over the physiological domain
     "WIDE_DOMAIN", "draw_wide", "domain_from_config", "given_keywords", "initial_stress_kpa",
-    "run_draw", "run_draws",
-    "UNDIAGNOSED", "under_rule", "summarise", "attribution_ceiling",
+    "run_draw", "run_draws", "interval_columns",
+    "UNDIAGNOSED", "under_rule", "summarise", "attribution_ceiling", "wrong_untied",
+    "interval_coverage",
+    # virtual experiments from other discretisations and FE codes
+    "OTHER_SOLVERS", "SolverRefused", "solver_curves",
     # accuracy of the space, FE checks of a diagnosis
     "AccuracyPoint", "draw_points", "compare_point", "normalised_error",
     "REL_TARGET", "ABS_TARGET_UM", "PROTOCOLS",

@@ -33,8 +33,10 @@ import pandas as pd
 
 from skinsuction.space import BASELINE, NONE, load
 
+from ._solvers import SolverRefused, solver_curves, solver_mesh
+
 __all__ = ["WIDE_DOMAIN", "draw_wide", "domain_from_config", "given_keywords", "run_draw",
-           "run_draws", "initial_stress_kpa"]
+           "run_draws", "initial_stress_kpa", "interval_columns"]
 
 #: The physiological domain of the draws (forearm suction studies: E = 129 +- 88 kPa,
 #: X1d = E / 6; dermis 0.5-2.5 mm; natural tension up to tens of kPa; Cutometer noise
@@ -243,11 +245,22 @@ def _rivals(fd, spaces_for, settings, truth, base_theta):
             "distinguishable": bool(gap >= settings.ambiguity_bic)}
 
 
-def _cache_key(d, mesh) -> dict:
+def _draw_keywords(d: dict, cause, bottom) -> dict:
+    """The model keywords of a draw's skin (its layers and hidden effect)."""
+    kw = {"x1d": d["x1d"], "x1h": d["ratio"] * d["x1d"], "bottom": bottom}
+    kw.update({k: float(d[k]) for k in ("t_d", "t_h") if d[k] != 1.0})
+    if cause is not None:
+        kw[cause.keyword] = float(d["value"])
+    return kw
+
+
+def _cache_key(d, mesh, solver="space") -> dict:
     """What a cached FE curve must match: the draw's parameters and the mesh (as JSON)."""
     import json
 
     key = {k: d[k] for k in ("x1d", "ratio", "p_max", "p_step", "value")} | {"mesh": mesh}
+    if solver == "calculix":
+        key |= {"code": "calculix"}
     if tuple(d.get("probes") or (2.0, 6.0)) != (2.0, 6.0) or d.get("t_d", 1.0) != 1.0:
         key |= {"probes": list(d["probes"]), "t_d": d["t_d"]}
     if d.get("t_h", 1.0) != 1.0:
@@ -255,26 +268,27 @@ def _cache_key(d, mesh) -> dict:
     return json.loads(json.dumps(key))
 
 
-def _cached_clean(cache_dir, truth, seed, d, mesh):
+def _cached_clean(cache_dir, truth, seed, d, mesh, solver="space"):
     """The noise-free curves of a draw from ``cache_dir``, if there for these parameters."""
     import json
 
     if cache_dir is None:
         return None, None
-    path = Path(cache_dir) / f"{truth}_{seed}.json"
+    tag = "" if solver == "space" else f"{solver}_"
+    path = Path(cache_dir) / f"{tag}{truth}_{seed}.json"
     if path.exists():
         saved = json.loads(path.read_text())
-        if saved.get("key") == _cache_key(d, mesh):
+        if saved.get("key") == _cache_key(d, mesh, solver):
             return path, {float(p): np.array(c, dtype=float) for p, c in saved["clean"].items()}
     return path, None
 
 
-def _save_clean(path, d, mesh, clean):
+def _save_clean(path, d, mesh, clean, solver="space"):
     import json
 
     from skinsuction._files import atomic_output
 
-    body = {"key": _cache_key(d, mesh), "clean": {f"{p:g}": [None if not np.isfinite(v) else float(v)
+    body = {"key": _cache_key(d, mesh, solver), "clean": {f"{p:g}": [None if not np.isfinite(v) else float(v)
                                               for v in c] for p, c in clean.items()}}
     path.parent.mkdir(parents=True, exist_ok=True)
     with atomic_output(path) as tmp:
@@ -282,7 +296,7 @@ def _save_clean(path, d, mesh, clean):
 
 
 def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
-             cache_dir=None, on_demand=None) -> dict:
+             cache_dir=None, on_demand=None, solver: str = "space") -> dict:
     """Draw, simulate, diagnose and judge one virtual experiment: one row.
 
     ``cache_dir``: where the noise-free FE curves of each draw are kept (one JSON
@@ -290,6 +304,8 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     diagnosis is re-measured on the same curves without the FE runs.
     ``on_demand``: the solver of the rays of layers the space lacks
     (:class:`skinsuction.space.OnDemandRays`), for draws with a given dermis.
+    ``solver``: the discretisation or FE code of the virtual experiment
+    (:data:`~skinsuction.evaluation.OTHER_SOLVERS`; default the space's own).
     """
     from skinsuction.measured import MeasuredDataError
 
@@ -306,18 +322,28 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     d["t_h_sd"] = (full.get("given_hypodermis_thickness") or {}).get("sd")
     p = np.arange(0.0, d["p_max"] + 1e-9, d["p_step"])
     t0 = time.perf_counter()
-    cache_path, clean = _cached_clean(cache_dir, truth, seed, d, base.spec.mesh)
+    fe_mesh = solver_mesh(solver, base.spec.mesh)
+    cache_path, clean = _cached_clean(cache_dir, truth, seed, d, fe_mesh, solver)
+    from_cache = clean is not None
+    if clean is None and solver != "space":
+        try:
+            clean = solver_curves(solver, _draw_keywords(d, cause, base.spec.bottom), d["probes"],
+                                  p, base.spec.mesh, list(base.spec.fallback))
+        except SolverRefused as err:
+            return {"truth": truth, "seed": seed, "solver": solver, "named": "solver_refused",
+                    "error": str(err)}
     ve = virtual_experiment(d["x1d"], d["ratio"] * d["x1d"], cause, d["value"],
                             noise_um=d["noise_um"], seed=seed, pressures_mbar=p,
                             mesh=base.spec.mesh, bottom=base.spec.bottom,
                             fallback=list(base.spec.fallback), clean=clean,
                             probes_mm=d["probes"],
                             layers={k: d[k] for k in ("t_d", "t_h") if d[k] != 1.0} or None)
-    if cache_path is not None and clean is None:
-        _save_clean(cache_path, d, base.spec.mesh, ve.clean)
-    row = {"truth": truth, "seed": seed, **{k: v for k, v in d.items() if k != "probes"},
+    if cache_path is not None and not from_cache:
+        _save_clean(cache_path, d, fe_mesh, ve.clean, solver)
+    row = {"truth": truth, "seed": seed, "solver": solver,
+           **{k: v for k, v in d.items() if k != "probes"},
            "x1h": ve.x1h, "fe_converged": ve.converged,
-           "fe_seconds": time.perf_counter() - t0, "fe_cached": clean is not None}
+           "fe_seconds": time.perf_counter() - t0, "fe_cached": from_cache}
     if truth == "pre_tension":
         row["initial_stress_kpa"] = initial_stress_kpa(d["value"], d["x1d"])
     if not ve.converged:
@@ -371,7 +397,25 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
         sym = spaces[named["cause"]].cause.symbol
         row.update(ext_x1d=named["parameters"]["X1d"], ext_x1h=named["parameters"]["X1h"],
                    ext_value=named["parameters"][sym], delta_bic=named["delta_bic"])
+    # the 95 % intervals of the model the verdict stands on, for their coverage
+    row.update(interval_columns((named or b).get("intervals"),
+                                None if named is None else spaces[named["cause"]].cause.symbol))
     return row
+
+
+def interval_columns(intervals, symbol=None) -> dict:
+    """A diagnosis's intervals as flat columns: ``ci_x1d_lo``, ``ci_x1d_hi``,
+    ``ci_x1d_open`` (an end at the space's edge), the same for ``x1h`` and for the
+    cause's parameter as ``ci_value_*``; nothing where there are none."""
+    out = {}
+    if not intervals or "error" in intervals:
+        return out
+    for name, col in (("X1d", "x1d"), ("X1h", "x1h"), (symbol, "value")):
+        iv = intervals.get(name) if name else None
+        if isinstance(iv, dict) and "lower" in iv:
+            out.update({f"ci_{col}_lo": iv["lower"], f"ci_{col}_hi": iv["upper"],
+                        f"ci_{col}_open": bool(iv["lower_open"] or iv["upper_open"])})
+    return out
 
 
 _SHARED: dict = {}

@@ -17,11 +17,13 @@ import pandas as pd
 
 from skinsuction.space import NONE
 
-__all__ = ["UNDIAGNOSED", "under_rule", "summarise", "attribution_ceiling"]
+__all__ = ["UNDIAGNOSED", "under_rule", "summarise", "attribution_ceiling", "wrong_untied",
+           "interval_coverage"]
 
 
-#: Draws without a diagnosis: the FE run stopped, or the loader refused its curve.
-UNDIAGNOSED = ("fe_failed", "input_rejected")
+#: Draws without a diagnosis: the FE run stopped, the loader refused its curve, or
+#: the other solver cannot carry the skin (:data:`~skinsuction.evaluation.OTHER_SOLVERS`).
+UNDIAGNOSED = ("fe_failed", "input_rejected", "solver_refused")
 
 
 def under_rule(rows: pd.DataFrame, pattern_gate: bool) -> pd.DataFrame:
@@ -69,7 +71,9 @@ def summarise(rows: pd.DataFrame, causes) -> dict:
              "named_right": float((g["named"] == truth).mean()) if len(g) else math.nan,
              **_distinguishable_rates(g, truth),
              "beyond_space": float((g["verdict"] == "beyond_space").mean()) if len(g) else
-             math.nan}
+             math.nan,
+             "wrong_untied": float(wrong_untied(g_all, truth).mean()) if len(g_all)
+             and truth != NONE else math.nan}
         hit = g[g["named"] == truth]
         if truth == NONE:
             r["false_alarm"] = float((g["named"] != NONE).mean()) if len(g) else math.nan
@@ -127,3 +131,55 @@ def _distinguishable_rates(g, truth) -> dict:
             "ceiling_named_right": float(attribution_ceiling(
                 g["rival_gap"].fillna(np.inf)).mean())
             if len(g) and "rival_gap" in g else math.nan}
+
+
+def _tied_with(g, truth) -> pd.Series:
+    tied = (g["ambiguous_with"] if "ambiguous_with" in g else pd.Series("", index=g.index))
+    return tied.fillna("").astype(str).str.split(";").apply(lambda a: truth in a)
+
+
+def wrong_untied(rows: pd.DataFrame, truth: str) -> pd.Series:
+    """Per draw of ``truth``: named another cause, and not tied with the truth (a
+    confident wrong cause; ``none`` and an undiagnosed draw are not causes).
+
+    Examples
+    --------
+    >>> rows = pd.DataFrame({"named": ["pre_tension", "hypodermis_thickness", "none",
+    ...                                "hypodermis_thickness"],
+    ...                      "ambiguous_with": ["", "pre_tension", "", ""]})
+    >>> wrong_untied(rows, "pre_tension").tolist()
+    [False, False, False, True]
+    """
+    named = rows["named"].astype(str)
+    other = (named != truth) & (named != NONE) & ~named.isin(UNDIAGNOSED) \
+        & (named != "beyond_space")
+    return other & ~_tied_with(rows, truth)
+
+
+def interval_coverage(rows: pd.DataFrame) -> pd.DataFrame:
+    """How often the 95 % intervals of the standing model cover the truth.
+
+    Over the draws whose cause was named right (``none`` for the neo-Hookean draws):
+    X1d, X1h and the cause's parameter (the ``ci_*`` columns of
+    :func:`~skinsuction.evaluation.run_draw`); an interval open at the space's edge
+    covers on that side.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per true cause: ``named_right`` draws, and per parameter the number
+        of intervals and the fraction covering.
+    """
+    out = []
+    for truth, g in rows[rows["named"] == rows["truth"]].groupby("truth", sort=False):
+        r = {"truth": truth, "named_right": len(g)}
+        for col, true in (("x1d", g["x1d"]), ("x1h", g["x1h"]), ("value", g.get("value"))):
+            lo, hi = g.get(f"ci_{col}_lo"), g.get(f"ci_{col}_hi")
+            if lo is None or true is None or truth == NONE and col == "value":
+                continue
+            has = lo.notna() & hi.notna()
+            cover = (lo <= true * (1 + 1e-9)) & (true <= hi * (1 + 1e-9))
+            r[f"{col}_intervals"] = int(has.sum())
+            r[f"{col}_covered"] = float(cover[has].mean()) if has.any() else math.nan
+        out.append(r)
+    return pd.DataFrame(out)

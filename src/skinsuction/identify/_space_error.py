@@ -18,8 +18,9 @@ import numpy as np
 from skinsuction.space import load
 
 __all__ = ["MODEL_ERROR_RELATIVE", "MODEL_ERROR_MM", "SPACE_ERROR_LOADS", "SPACE_ERROR_RMS",
-           "point_sd", "space_error_rms", "space_error_direction", "decorrelate",
-           "likelihood_residuals"]
+           "DISCRETISATION_ERROR_HEIGHTS", "DISCRETISATION_ERROR_RMS", "point_sd",
+           "space_error_rms", "discretisation_error_rms", "correlated_error_rms",
+           "space_error_direction", "decorrelate", "likelihood_residuals"]
 
 #: Accuracy of the scale-free space, the target it was built to (0.2 % of M or
 #: 0.3 µm; measured against direct FE runs: 0.17 % at the 95th percentile, more for
@@ -54,6 +55,85 @@ SPACE_ERROR_RMS = {
           0.0002, 0.0003, 0.0003),
 }
 
+#: The FE discretisation of the space itself.  Its mesh (``quad8`` cells, reduced
+#: quadrature) is not the mesh limit: against the same skins on a mesh with every
+#: element split in four (within 0.06 % of the limit on small domes), measured by
+#: ``python benchmarks/discretisation_error.py`` on the confusion benchmark's draws, M
+#: differs by a relative rms that grows with the dome's height M over the aperture's
+#: radius a (a soft, thin hypodermis under a high dome is too soft on the coarse mesh).
+#: It is smooth along a curve, so it joins the space's error in the correlated term,
+#: in quadrature (:func:`correlated_error_rms`; ``docs/other_solvers.md``).  Measured
+#: on 28 November 2026 over 60 draws (12 per cause, seeds 1000 + 100000 k + i): the rms
+#: per probe in bins of M/a (0-0.1, 0.1-0.2, 0.2-0.3, 0.3-0.4, 0.4-0.5, 0.5-0.7,
+#: 0.7-1, above 1; 6-30 draws a bin), at the bins' centres, made non-decreasing with
+#: the height; the 2 mm probe's last value is carried beyond M/a = 0.7, where no draw went.
+DISCRETISATION_ERROR_HEIGHTS = (0.05, 0.15, 0.25, 0.35, 0.45, 0.6, 0.85, 1.2)
+DISCRETISATION_ERROR_RMS = {
+    2.0: (0.00156, 0.00156, 0.00156, 0.00156, 0.00274, 0.00274, 0.00274, 0.00274),
+    4.0: (0.0015, 0.00159, 0.00239, 0.00286, 0.00286, 0.00286, 0.0044, 0.0299),
+    6.0: (0.00121, 0.00144, 0.00315, 0.00638, 0.0102, 0.0191, 0.0304, 0.0849),
+    8.0: (0.001, 0.00104, 0.00222, 0.00259, 0.00413, 0.00944, 0.0322, 0.0988),
+}
+
+#: Switch of the discretisation term (a benchmark compares with and without it).
+DISCRETISATION_ERROR = True
+
+
+def discretisation_error_rms(probe_mm, measured_mm):
+    """The relative rms of the space's discretisation error at each deflection.
+
+    Parameters
+    ----------
+    probe_mm : float
+        The aperture (mm): its radius scales the dome's height.
+    measured_mm : array_like
+        The deflections (mm).
+
+    Returns
+    -------
+    numpy.ndarray
+        :data:`DISCRETISATION_ERROR_RMS` at M / a, linear between the heights of
+        :data:`DISCRETISATION_ERROR_HEIGHTS` (the end values beyond them) and, between
+        the probes of the table, in log of the aperture (the nearest beyond them);
+        zeros when :data:`DISCRETISATION_ERROR` is off.
+
+    Examples
+    --------
+    >>> r = discretisation_error_rms(6.0, [0.03, 3.0])
+    >>> bool(r[0] < 0.005 < r[1])
+    True
+    """
+    m = np.abs(np.asarray(measured_mm, dtype=float))
+    if not DISCRETISATION_ERROR:
+        return np.zeros_like(m)
+    return np.interp(m / (0.5 * float(probe_mm)), DISCRETISATION_ERROR_HEIGHTS,
+                     _per_aperture(DISCRETISATION_ERROR_RMS, probe_mm))
+
+
+def correlated_error_rms(probe_mm, pressure_mbar, measured_mm, x1d_mpa):
+    """The relative rms of the correlated term at each point: the space's error at
+    the point's load p / X1d (:func:`space_error_rms`) and the discretisation's at its
+    dome height (:func:`discretisation_error_rms`), in quadrature.
+
+    Parameters
+    ----------
+    probe_mm : float
+        The aperture (mm).
+    pressure_mbar, measured_mm : array_like
+        The points' suctions (mbar) and deflections (mm).
+    x1d_mpa : float
+        The X1d (MPa) at which the load of a point is read.
+
+    Returns
+    -------
+    numpy.ndarray
+        One relative rms per point.
+    """
+    rms = space_error_rms(probe_mm)
+    space = (0.0 if rms is None else
+             np.interp(load(pressure_mbar, float(x1d_mpa)), SPACE_ERROR_LOADS, rms))
+    return np.hypot(space, discretisation_error_rms(probe_mm, measured_mm))
+
 
 def point_sd(sigma_mm, measured_mm, model_error):
     """The sd of each measured point: the noise and the space's accuracy in quadrature.
@@ -75,6 +155,21 @@ def point_sd(sigma_mm, measured_mm, model_error):
     """
     floor = MODEL_ERROR_MM if model_error else 0.0
     return np.sqrt(sigma_mm ** 2 + (model_error * np.abs(measured_mm)) ** 2 + floor ** 2)
+
+
+def _per_aperture(table: dict, probe_mm) -> np.ndarray:
+    """A profile of ``table`` ({aperture: values}) at ``probe_mm``: linear in log of the
+    aperture between its probes, the nearest one beyond them."""
+    table = {float(k): np.asarray(v, dtype=float) for k, v in table.items()}
+    p = float(probe_mm)
+    if p in table:
+        return table[p]
+    probes = np.array(sorted(table))
+    x = np.clip(math.log(p), math.log(probes[0]), math.log(probes[-1]))
+    i = int(np.clip(np.searchsorted(np.log(probes), x) - 1, 0, probes.size - 2))
+    lo, hi = probes[i], probes[min(i + 1, probes.size - 1)]
+    w = 0.0 if hi == lo else (x - math.log(lo)) / (math.log(hi) - math.log(lo))
+    return (1 - w) * table[lo] + w * table[hi]
 
 
 def space_error_rms(probe_mm):
@@ -99,25 +194,19 @@ def space_error_rms(probe_mm):
     >>> bool(np.all(np.asarray(space_error_rms(5.0)) > 0))
     True
     """
-    table = {float(k): np.asarray(v, dtype=float) for k, v in SPACE_ERROR_RMS.items()}
-    if not table:
+    if not SPACE_ERROR_RMS:
         return None
-    p = float(probe_mm)
-    if p in table:
-        return SPACE_ERROR_RMS[p]
-    probes = np.array(sorted(table))
-    x = np.clip(math.log(p), math.log(probes[0]), math.log(probes[-1]))
-    i = int(np.clip(np.searchsorted(np.log(probes), x) - 1, 0, probes.size - 2))
-    lo, hi = probes[i], probes[min(i + 1, probes.size - 1)]
-    w = 0.0 if hi == lo else (x - math.log(lo)) / (math.log(hi) - math.log(lo))
-    return tuple(float(v) for v in (1 - w) * table[lo] + w * table[hi])
+    if float(probe_mm) in SPACE_ERROR_RMS:
+        return SPACE_ERROR_RMS[float(probe_mm)]
+    return tuple(float(v) for v in _per_aperture(SPACE_ERROR_RMS, probe_mm))
 
 
 def space_error_direction(probe_mm, pressure_mbar, measured_mm, x1d_mpa, sd):
     """(unit direction, gamma) of the correlated space error of one probe's points.
 
     The covariance of the points is ``diag(sd^2) + v v^T`` with ``v`` the rms
-    space error at each point's load; whitened residuals ``z = r / sd`` become
+    error of the space and of its discretisation at each point
+    (:func:`correlated_error_rms`); whitened residuals ``z = r / sd`` become
     ``z - gamma (z . a) a`` with ``a = (v / sd) / |v / sd|`` and
     ``gamma = 1 - 1 / sqrt(1 + |v / sd|^2)``, whose squared norm is the chi2 of
     that covariance (Sherman-Morrison).
@@ -125,7 +214,7 @@ def space_error_direction(probe_mm, pressure_mbar, measured_mm, x1d_mpa, sd):
     Parameters
     ----------
     probe_mm : float
-        The probe (its rms profile, :func:`space_error_rms`).
+        The probe (its rms profiles, :func:`correlated_error_rms`).
     pressure_mbar, measured_mm : array_like
         The points' suctions (mbar) and measured deflections (mm).
     x1d_mpa : float
@@ -140,11 +229,8 @@ def space_error_direction(probe_mm, pressure_mbar, measured_mm, x1d_mpa, sd):
     gamma : float
         The shrink factor of the residuals' component along ``a``.
     """
-    rms = space_error_rms(probe_mm)
-    if rms is None:
-        return None, 0.0
-    q = load(pressure_mbar, float(x1d_mpa))
-    v = np.interp(q, SPACE_ERROR_LOADS, rms) * np.abs(measured_mm) / sd
+    v = (correlated_error_rms(probe_mm, pressure_mbar, measured_mm, x1d_mpa)
+         * np.abs(measured_mm) / sd)
     norm = float(np.sqrt(v @ v))
     if norm == 0.0:
         return None, 0.0

@@ -61,11 +61,15 @@ from ._ramp_steps import (
 # the space's error in the likelihood (:mod:`._space_error`), importable from here
 # where it was defined first
 from ._space_error import (
+    DISCRETISATION_ERROR_HEIGHTS,
+    DISCRETISATION_ERROR_RMS,
     MODEL_ERROR_MM,
     MODEL_ERROR_RELATIVE,
     SPACE_ERROR_LOADS,
     SPACE_ERROR_RMS,
+    correlated_error_rms,
     decorrelate,
+    discretisation_error_rms,
     space_error_direction,
     space_error_rms,
 )
@@ -74,7 +78,9 @@ __all__ = ["InputError", "OBJECTIVE_KINDS", "SPREAD_WARNING", "identify_measured
            "identify_data", "write_identification", "Identification", "file_sha256",
            "load_space", "LoadedSpace", "MODEL_ERROR_MM", "MODEL_ERROR_RELATIVE",
            "SPACE_ERROR_LOADS", "SPACE_ERROR_RMS", "SPACE_ERROR_CORRELATED",
-           "space_error_rms", "space_error_direction", "decorrelate"]
+           "DISCRETISATION_ERROR_HEIGHTS", "DISCRETISATION_ERROR_RMS",
+           "space_error_rms", "discretisation_error_rms", "correlated_error_rms",
+           "space_error_direction", "decorrelate"]
 
 #: Switch of the correlated term of the space's error in the likelihood
 #: (:data:`SPACE_ERROR_RMS`; a benchmark compares with and without).
