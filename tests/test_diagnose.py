@@ -313,13 +313,14 @@ def test_the_space_error_term_is_the_chi2_of_its_covariance_in_every_fit_path():
     model = ModelCurves(spaces[BASELINE], weighted)
     fit = evaluate_fit(model, theta, BASELINE)
     r = 1e3 * (fd[6.0].deflection_mm - fit.fitted_mm[6.0])  # µm
-    # the space's error at each load and the discretisation's at each dome height M/a
+    # the space's error at each load and the discretisation's at each dome height M/a,
+    # the latter also in each point's own sd (noise 1 µm)
     m = np.abs(fd[6.0].deflection_mm)
+    disc = np.interp(m / 3.0, DISCRETISATION_ERROR_HEIGHTS, DISCRETISATION_ERROR_RMS[6.0])
     v = 1e3 * np.hypot(np.interp(fd[6.0].pressure_mbar / 0.02, SPACE_ERROR_LOADS,
-                                 SPACE_ERROR_RMS[6.0]),
-                       np.interp(m / 3.0, DISCRETISATION_ERROR_HEIGHTS,
-                                 DISCRETISATION_ERROR_RMS[6.0])) * m
-    dense = float(r @ np.linalg.solve(np.eye(r.size) + np.outer(v, v), r))
+                                 SPACE_ERROR_RMS[6.0]), disc) * m
+    cov = np.diag(1.0 + (1e3 * disc * m) ** 2) + np.outer(v, v)
+    dense = float(r @ np.linalg.solve(cov, r))
     assert fit.chi2 == pytest.approx(dense, rel=1e-10)
     obj = _Objective(model)
     assert 2 * obj(theta[None, :])[0] == pytest.approx(dense, rel=1e-10)

@@ -164,14 +164,14 @@ def test_weighted_likelihood_takes_each_curves_own_probe_error_profile():
     z = likelihood_residuals(obj, "weighted", None, 2e-3, x1d_mpa=0.02)(x)
     expected = []
     for probe, o in ((4.0, obj.objective_2mm), (8.0, obj.objective_6mm)):
-        sd = point_sd(2e-3, o.measured_mm, 2e-3)
+        sd = point_sd(2e-3, o.measured_mm, 2e-3, probe)
         a, g = space_error_direction(probe, o.pressure_mbar, o.measured_mm, 0.02, sd)
         expected.append(decorrelate(o.residuals(x) / sd, a, g))
     np.testing.assert_allclose(z, np.concatenate(expected, axis=1), rtol=1e-12)
     # and the 2/6 mm profiles give a measurably different chi2 here
     wrong = []
     for probe, o in ((2.0, obj.objective_2mm), (6.0, obj.objective_6mm)):
-        sd = point_sd(2e-3, o.measured_mm, 2e-3)
+        sd = point_sd(2e-3, o.measured_mm, 2e-3, probe)
         a, g = space_error_direction(probe, o.pressure_mbar, o.measured_mm, 0.02, sd)
         wrong.append(decorrelate(o.residuals(x) / sd, a, g))
     assert abs((z ** 2).sum() / (np.concatenate(wrong, axis=1) ** 2).sum() - 1) > 0.01

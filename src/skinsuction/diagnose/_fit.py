@@ -21,7 +21,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from skinsuction.identify import Chi2Objective, bound_flags, profile_intervals, repeated_fit
-from skinsuction.identify.measured_fit import decorrelate, space_error_direction
+from skinsuction.identify.measured_fit import (decorrelate, discretisation_error_rms,
+                                               space_error_direction)
 
 from skinsuction.space import RayInterpolant, RaySpace, interpolant, space_causes
 
@@ -45,8 +46,8 @@ class FitData:
     deflection_mm: np.ndarray
     sigma_um: float
     curve_ids: tuple = ()
-    #: (unit direction, gamma) of the space's correlated error along the curve
-    #: (:func:`with_space_error`), or None: independent points
+    #: (unit direction, gamma, scale) of the space's correlated error along the curve
+    #: and of each point's own (:func:`with_space_error`), or None: the noise alone
     space_error: tuple | None = None
 
     @property
@@ -57,7 +58,8 @@ class FitData:
         """Residuals in units of sigma (N, n) -> independent unit-variance ones."""
         if self.space_error is None:
             return z
-        return decorrelate(z, *self.space_error)
+        a, gamma, scale = self.space_error
+        return decorrelate(z * scale, a, gamma)
 
 
 def with_space_error(data: dict, x1d_mpa: float) -> dict:
@@ -85,9 +87,13 @@ def with_space_error(data: dict, x1d_mpa: float) -> dict:
     """
     out = {}
     for p, d in data.items():
-        a, gamma = space_error_direction(p, d.pressure_mbar, d.deflection_mm, x1d_mpa,
-                                         np.full(d.n, 1e-3 * d.sigma_um))
-        out[p] = replace(d, space_error=None if a is None else (a, gamma))
+        # each point's sd: the noise and the discretisation's error (its wiggles along
+        # the curve); the correlated term is then read in those units
+        sd0 = 1e-3 * d.sigma_um
+        sd = np.hypot(sd0, discretisation_error_rms(p, d.deflection_mm)
+                      * np.abs(d.deflection_mm))
+        a, gamma = space_error_direction(p, d.pressure_mbar, d.deflection_mm, x1d_mpa, sd)
+        out[p] = replace(d, space_error=(a, gamma, sd0 / sd))
     return out
 
 

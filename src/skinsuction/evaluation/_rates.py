@@ -140,19 +140,22 @@ def _tied_with(g, truth) -> pd.Series:
 
 def wrong_untied(rows: pd.DataFrame, truth: str) -> pd.Series:
     """Per draw of ``truth``: named another cause, and not tied with the truth (a
-    confident wrong cause; ``none`` and an undiagnosed draw are not causes).
+    confident wrong cause; ``none``, an undiagnosed draw and a verdict of
+    ``beyond_space``, which says that the fit stands at the space's edge, are not).
 
     Examples
     --------
     >>> rows = pd.DataFrame({"named": ["pre_tension", "hypodermis_thickness", "none",
-    ...                                "hypodermis_thickness"],
-    ...                      "ambiguous_with": ["", "pre_tension", "", ""]})
+    ...                                "hypodermis_thickness", "dermis_thickness"],
+    ...                      "ambiguous_with": ["", "pre_tension", "", "", ""],
+    ...                      "verdict": ["cause_found"] * 4 + ["beyond_space"]})
     >>> wrong_untied(rows, "pre_tension").tolist()
-    [False, False, False, True]
+    [False, False, False, True, False]
     """
     named = rows["named"].astype(str)
+    verdict = (rows["verdict"] if "verdict" in rows else pd.Series("", index=rows.index))
     other = (named != truth) & (named != NONE) & ~named.isin(UNDIAGNOSED) \
-        & (named != "beyond_space")
+        & (named != "beyond_space") & (verdict.astype(str) != "beyond_space")
     return other & ~_tied_with(rows, truth)
 
 
