@@ -283,6 +283,20 @@ def _cached_clean(cache_dir, truth, seed, d, mesh, solver="space"):
     return path, None
 
 
+def _draw_curves(truth, seed, d, cause, spec, p, cache_dir, solver):
+    """A draw's noise-free curves: (the solver's mesh, the cache file, the curves, whether
+    they came from the cache).  The curves are None where the virtual experiment is to
+    solve them on the space's own FE; another solver's are solved here
+    (:class:`SolverRefused` where it cannot carry the skin)."""
+    fe_mesh = solver_mesh(solver, spec.mesh)
+    cache_path, clean = _cached_clean(cache_dir, truth, seed, d, fe_mesh, solver)
+    from_cache = clean is not None
+    if clean is None and solver != "space":
+        clean = solver_curves(solver, _draw_keywords(d, cause, spec.bottom), d["probes"], p,
+                              spec.mesh, list(spec.fallback))
+    return fe_mesh, cache_path, clean, from_cache
+
+
 def _save_clean(path, d, mesh, clean, solver="space"):
     import json
 
@@ -304,8 +318,7 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     diagnosis is re-measured on the same curves without the FE runs.
     ``on_demand``: the solver of the rays of layers the space lacks
     (:class:`skinsuction.space.OnDemandRays`), for draws with a given dermis.
-    ``solver``: the discretisation or FE code of the virtual experiment
-    (:data:`~skinsuction.evaluation.OTHER_SOLVERS`; default the space's own).
+    ``solver``: the virtual experiment's discretisation or FE code (:data:`.OTHER_SOLVERS`).
     """
     from skinsuction.measured import MeasuredDataError
 
@@ -322,16 +335,12 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     d["t_h_sd"] = (full.get("given_hypodermis_thickness") or {}).get("sd")
     p = np.arange(0.0, d["p_max"] + 1e-9, d["p_step"])
     t0 = time.perf_counter()
-    fe_mesh = solver_mesh(solver, base.spec.mesh)
-    cache_path, clean = _cached_clean(cache_dir, truth, seed, d, fe_mesh, solver)
-    from_cache = clean is not None
-    if clean is None and solver != "space":
-        try:
-            clean = solver_curves(solver, _draw_keywords(d, cause, base.spec.bottom), d["probes"],
-                                  p, base.spec.mesh, list(base.spec.fallback))
-        except SolverRefused as err:
-            return {"truth": truth, "seed": seed, "solver": solver, "named": "solver_refused",
-                    "error": str(err)}
+    try:
+        fe_mesh, cache_path, clean, from_cache = _draw_curves(truth, seed, d, cause, base.spec,
+                                                              p, cache_dir, solver)
+    except SolverRefused as err:
+        return {"truth": truth, "seed": seed, "solver": solver, "named": "solver_refused",
+                "error": str(err)}
     ve = virtual_experiment(d["x1d"], d["ratio"] * d["x1d"], cause, d["value"],
                             noise_um=d["noise_um"], seed=seed, pressures_mbar=p,
                             mesh=base.spec.mesh, bottom=base.spec.bottom,
@@ -398,8 +407,8 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
         row.update(ext_x1d=named["parameters"]["X1d"], ext_x1h=named["parameters"]["X1h"],
                    ext_value=named["parameters"][sym], delta_bic=named["delta_bic"])
     # the 95 % intervals of the model the verdict stands on, for their coverage
-    row.update(interval_columns((named or b).get("intervals"),
-                                None if named is None else spaces[named["cause"]].cause.symbol))
+    sym = None if named is None else spaces[named["cause"]].cause.symbol
+    row.update(interval_columns((named or b).get("intervals"), sym))
     return row
 
 
