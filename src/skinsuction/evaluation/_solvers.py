@@ -60,7 +60,7 @@ def solver_mesh(name: str, mesh: dict | None) -> dict:
 def _calculix_curve(params: dict, pressures, mesh: dict, max_increment_mbar: float):
     from skinsuction import model
     from skinsuction.model import CalculixError, SuctionTest, inp_deck, run_calculix
-    from skinsuction.space._solve import two_layer_skin
+    from skinsuction.space import two_layer_skin
 
     skin, probe = two_layer_skin(model, params)
     if skin.has_prestretch:

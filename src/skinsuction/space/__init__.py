@@ -156,7 +156,7 @@ from ._shipped_check import (
     knife_edge_rays,
     shipped_check_applies,
 )
-from ._solve import compute_point, solve_with_fallbacks
+from ._solve import compute_point, solve_with_fallbacks, two_layer_skin
 from ._storage import (
     AXES,
     AXIS_PATHS,
@@ -191,7 +191,7 @@ __all__ = [
     "point_id", "read_curve", "read_curves", "round_sig", "write_curve",
     "atomic_output", "write_table",
     # FE solves
-    "compute_point", "solve_with_fallbacks",
+    "compute_point", "solve_with_fallbacks", "two_layer_skin",
     # the grid layout
     "SimulatedSpace", "SLICE_PATHS", "assemble_space", "convergence_summary", "expand_axis", "grid_points",
     "read_space", "GriddedSpace",
