@@ -23,28 +23,25 @@ def _frac(k: int, n: int) -> str:
 
 
 def run_rows(path: Path) -> list:
-    from skinsuction.evaluation import UNDIAGNOSED, wrong_untied
+    from skinsuction.evaluation import UNDIAGNOSED, interval_coverage, wrong_untied
 
     df = pd.read_csv(path)
     ok = df[~df["named"].isin(UNDIAGNOSED)]
+    coverage = interval_coverage(df).set_index("truth").to_dict("index")
     out = []
     for truth, g in ok.groupby("truth", sort=False):
         det = g if truth == "none" else g[g["detectable"].fillna(True).astype(bool)]
-        right = g[g["named"] == truth]
         row = {"run": path.stem, "truth": truth, "diagnosed": len(g),
                "named right (detectable)": _frac(int((det["named"] == truth).sum()), len(det)),
                "confident wrong cause": _frac(int(wrong_untied(g, truth).sum()), len(g))
                if truth != "none" else _frac(int((g["named"] != "none").sum()
                                                  - (g["verdict"] == "beyond_space").sum()),
                                              len(g))}
-        for col, true in (("x1d", "x1d"), ("x1h", "x1h"), ("value", "value")):
-            lo, hi = f"ci_{col}_lo", f"ci_{col}_hi"
-            if lo not in right or (truth == "none" and col == "value"):
-                row[f"{col} covered"] = "–"
-                continue
-            r = right[right[lo].notna()]
-            cover = ((r[lo] <= r[true] * (1 + 1e-9)) & (r[true] <= r[hi] * (1 + 1e-9))).sum()
-            row[f"{col} covered"] = _frac(int(cover), len(r))
+        cov = coverage.get(truth, {})
+        for col in ("x1d", "x1h", "value"):
+            n = cov.get(f"{col}_intervals")
+            row[f"{col} covered"] = ("–" if n is None or n != n
+                                     else _frac(round(cov[f"{col}_covered"] * n), int(n)))
         out.append(row)
     return out
 

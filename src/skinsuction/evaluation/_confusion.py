@@ -402,12 +402,11 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
         row.update({f"named_{tag}": c, f"verdict_{tag}": v,
                     f"ambiguous_with_{tag}": ";".join(amb)})
     named = next((c for c in rep["candidates"] if c["cause"] == rep["cause"]), None)
+    sym = None if named is None else spaces[named["cause"]].cause.symbol
     if named is not None:
-        sym = spaces[named["cause"]].cause.symbol
         row.update(ext_x1d=named["parameters"]["X1d"], ext_x1h=named["parameters"]["X1h"],
                    ext_value=named["parameters"][sym], delta_bic=named["delta_bic"])
     # the 95 % intervals of the model the verdict stands on, for their coverage
-    sym = None if named is None else spaces[named["cause"]].cause.symbol
     row.update(interval_columns((named or b).get("intervals"), sym))
     return row
 
