@@ -16,6 +16,7 @@ from skinsuction.space import (
     Geometry,
     GeometryOutsideSpace,
     OnDemandRays,
+    RayInterpolant,
     RaySpace,
     RaySpec,
     default_registry,
@@ -212,6 +213,40 @@ def test_a_given_thickness_sd_is_a_nuisance_the_fit_recovers():
     assert fit.parameters["t_d"] == pytest.approx(1.42, abs=0.01)
     # the prior is in chi^2: a fit that moves the thickness by delta sd pays delta^2
     assert fit.chi2 == pytest.approx(((1.42 - 1.3) / 0.1) ** 2, rel=0.05)
+
+
+def test_a_given_sd_at_the_papers_layers_brackets_the_tailed_rays_without_their_tail():
+    """At 1 mm layers the shipped rays run on into the load tail; the brackets at ±1 sd
+    come from rays on demand, which stop where the tail starts.  A candidate beyond
+    their reach is NaN (beyond the space), not an index past the brackets' rays."""
+    from skinsuction.diagnose import FitData, ModelCurves
+
+    spec = RaySpec([6], [0.01, 0.1], load_max=200.0, load_steps=8, load_tail_from=100.0,
+                   load_tail_steps=4)
+    short = spec.untailed()
+    assert len(short.load_nodes) < len(spec.load_nodes)
+
+    def rays(loads, t_d):
+        q = np.asarray(loads) / 200.0
+        return np.stack([q, q ** 1.6])[:, None, :] * (1 + 0.5 * (t_d - 1.0))
+
+    class Solver:  # as OnDemandRays: its rays are those of the untailed specification
+        def rays(self, p, layers, cause=None):
+            return rays(short.load_nodes, layers["dermis.thickness"]), {"rays": 2, "cache": "-"}
+
+    base = RaySpace(None, spec, np.array([np.nan]), {6.0: rays(spec.load_nodes, 1.0)})
+    g = Geometry(1.0, 1.0, given=("t_d",), sd={"t_d": 0.1})
+    out, _ = spaces_at({BASELINE: base}, [6.0], g, Solver())
+    (n,) = out[BASELINE].nuisance
+    assert n.plus.rays(6.0).shape[-1] == len(n.plus.spec.load_nodes)
+    p = np.linspace(5.0, 50.0, 10)
+    model = ModelCurves(out[BASELINE], {6.0: FitData(6.0, p, np.zeros_like(p), 0.01)})
+    # X1d = 1 reads loads to 50 (within both reaches); X1d = 0.3 to 167, past 100
+    theta = np.array([[0.0, -1.5, 1.0], [math.log10(0.3), -1.5, 1.0]])
+    m = model(theta)[6.0]
+    assert np.isfinite(m[0]).all()
+    assert np.allclose(m[0], RayInterpolant(base, 6.0, p)(theta[:1, :2])[0] * 1.05, rtol=1e-6)
+    assert np.isnan(m[1][p / 0.3 > 100.0]).all()
 
 
 def _pre_tension_at_given_dermis():

@@ -432,7 +432,9 @@ def _nuisances(center, probes, geometry, layers, on_demand, notes, full_nodes=()
                     info = {**info, "rays_solved": info.get("rays", 0)}
                 for k in total:
                     total[k] += info.get(k, 0)
-            brackets.append(RaySpace(cause, center.spec, coordinates, rays,
+            # rays on demand stop where the load tail starts: at 1 mm layers the centre
+            # (the shipped rays) has the tail, its brackets do not
+            brackets.append(RaySpace(cause, center.spec.untailed(), coordinates, rays,
                                      {**center.metadata, key: t}))
         out.append(ThicknessNuisance(key, value, float(sd), center, *brackets))
         notes.append(f"the given {key} = {value:g} ± {sd:g} mm is a nuisance parameter of every "
