@@ -208,3 +208,45 @@ def test_a_given_thickness_s_sd_is_predicted_as_noisy_fits_see_it(spaces):
     # the thickness's sd, not the noise, sets X1d's interval here
     plain = predict_skin(skin, Design((2.0, 6.0), 100.0), spaces, settings)
     assert pred["X1d_halfwidth"] > 3 * plain["X1d_halfwidth"]
+
+
+# ------------------------------------------------------------------ the check's measurements
+def test_a_check_measures_the_skin_as_the_design_does_with_its_layers_given(tmp_path):
+    from skinsuction.design import measure_skin, parse_design
+    from skinsuction.measured import geometry_of, load_measured
+    from skinsuction.model import Skin, simulate
+
+    skin = Box().draw(1, seed=0).iloc[0].to_dict()
+    design = parse_design("2@20", given={"t_d": 0.1})
+    path = measure_skin(skin, design, None, 3, tmp_path)
+    data = load_measured(path)
+    g, _ = geometry_of(data)
+    assert (g.t_d, g.given, g.sd) == (1.0, ("t_d",), {"t_d": 0.1})
+    table = pd.read_csv(path, comment="#")
+    assert set(table["probe_mm"]) == {2} and table["pressure_mbar"].max() == 20
+    m = table["deflection_mm"].to_numpy()
+    assert np.allclose(m, np.round(m, 2))  # read at the 0.01 mm step
+    # the FE curve itself, within the noise (2 µm) and the reading step (5 µm at most)
+    x1d = skin["x1d_mpa"]
+    fe = simulate(Skin.two_layer(x1d, x1d * skin["x1h_ratio"]), 2.0,
+                  pressures_mbar=table["pressure_mbar"].to_numpy())
+    assert np.abs(m - fe.deflection_mm).max() < 0.005 + 5 * 0.002
+
+
+def test_the_checks_summary_counts_the_named_the_tied_and_the_wrong():
+    from skinsuction.design import check_summary
+
+    rows = pd.DataFrame({
+        "design": ["2+4+8 mm, 300 mbar"] * 5,
+        "pred_beyond_space": [False, False, False, False, True],
+        "pred_pre_tension_detectable": [True, True, True, False, math.nan],
+        "pred_pre_tension_vs_hypodermis_thickness_gap": [100.0, 100.0, 100.0, 0.1, math.nan],
+        "real_pre_tension_verdict": ["cause_found"] * 3 + ["neo_hookean_fits", math.nan],
+        "real_pre_tension_cause": ["pre_tension", "hypodermis_thickness",
+                                   "strain_stiffening", None, None],
+        "real_pre_tension_tied": ["", "pre_tension", "", "", ""],
+    })
+    lines = "\n".join(check_summary(rows, ("pre_tension",)))
+    assert "5 skins, 1 beyond the space" in lines
+    assert "over the 3 predicted detectable: ceiling 1.00, named right 1/3" in lines
+    assert "right or tied 0.67, wrong and not tied 1/3" in lines

@@ -232,7 +232,7 @@ def build_command(config_file):
 def design_settings(design, which):
     """The design rule's settings: the default question ("precision"), or the same
     designs with the causes told apart ("causes")."""
-    d = {k: v for k, v in design.items() if k != "causes"}
+    d = {k: v for k, v in design.items() if k not in ("causes", "check")}
     if which == "causes":
         causes = design.get("causes", {})
         d["skins"] = causes.get("skins", 24)

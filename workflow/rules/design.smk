@@ -7,6 +7,10 @@ box of skins + candidate designs + the question + the scale-free space
   -> results/design/precision/{design.md, designs.csv, predictions.csv, design.json,
      precision.png} (in the default target: X1h to ±20 %)
   -> results/design/causes/...: the same with causes told apart (target design_causes)
+design.check: designs x skins of the box, each measured by FE virtual experiments and
+  diagnosed (one job a skin: rows/<design>/<skin>.csv)
+  -> results/design/check/{rows.csv, summary.md} (target design_check, not in the
+     default target: about 2 CPU-min a skin and design)
 """
 
 DESIGN = dict(config["design"])
@@ -17,6 +21,15 @@ DESIGN_FILES = {"markdown": "design.md", "designs": "designs.csv",
                 "predictions": "predictions.csv", "record": "design.json",
                 "figure": "precision.png"}
 DESIGN_OUTPUTS = expand("results/design/precision/{file}", file=DESIGN_FILES.values())
+
+
+DCHECK = dict(DESIGN.get("check") or {})
+DCHECK_DIR = "results/design/check"
+DCHECK_ROWS = [
+    f"{DCHECK_DIR}/rows/{d}/{i}.csv"
+    for d in DCHECK.get("designs", [])
+    for i in range(DCHECK.get("skins", 60))
+]
 
 
 localrules:
@@ -66,3 +79,61 @@ rule design_causes:
     """Target: the designs with pre-tension, a thick hypodermis and stiffening told apart."""
     input:
         expand("results/design/causes/{file}", file=DESIGN_FILES.values()),
+
+
+rule design_check_skin:
+    """One skin of the box and one design: the prediction, then FE virtual experiments
+    of the skin (and of it with each cause added) diagnosed as a user runs diagnose."""
+    input:
+        spaces=SF_SPACES,
+    output:
+        row=f"{DCHECK_DIR}/rows/{{design}}/{{skin}}.csv",
+    wildcard_constraints:
+        design=r"[2468](\+[2468])*@[0-9]+",
+        skin="[0-9]+",
+    log:
+        "logs/design/check/{design}/{skin}.log",
+    benchmark:
+        "results/benchmarks/design/check/{design}/{skin}.tsv"
+    params:
+        settings=DCHECK,
+        box=DESIGN.get("box"),
+        noise_um=DESIGN.get("noise_um", 2.0),
+        resolution_mm=DESIGN.get("resolution_mm", 0.01),
+        on_demand_dir="results/simulated_space/on_demand",
+        code=code_hash("design", "diagnose", "evaluation", "model", *SPACE_CODE),
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=60,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/design_check_skin.py"
+
+
+rule design_check:
+    """Target: the designs' predictions against the diagnoses of FE virtual experiments."""
+    input:
+        rows=DCHECK_ROWS,
+    output:
+        rows=f"{DCHECK_DIR}/rows.csv",
+        summary=report(
+            f"{DCHECK_DIR}/summary.md",
+            caption="../report/design_check.rst",
+            category="Design",
+            labels={"question": "check", "file": "summary.md"},
+        ),
+    log:
+        "logs/design/check.log",
+    params:
+        settings=DCHECK,
+        code=code_hash("design", "evaluation"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/design_check_summary.py"
