@@ -250,3 +250,71 @@ def test_the_checks_summary_counts_the_named_the_tied_and_the_wrong():
     assert "5 skins, 1 beyond the space" in lines
     assert "over the 3 predicted detectable: ceiling 1.00, named right 1/3" in lines
     assert "right or tied 0.67, wrong and not tied 1/3" in lines
+
+
+# ------------------------------------------------------------------ mode 1 and mode 2
+def test_a_time_designs_fisher_information_is_the_scatter_of_its_fits(spaces):
+    """Noisy mode 1 curves (independent Gaussian points of the identification's own sd),
+    fitted 40 times: the scatter of the estimates is the Fisher prediction's sd (each of
+    the four log parameters within 30 %; 40 fits give the sd to about 11 %)."""
+    from dataclasses import replace
+
+    from skinsuction.design import time_curves
+    from skinsuction.identify import (TimeCurveModel, evaluate_time_fit, fit_time_model,
+                                      laplace_intervals)
+
+    space = spaces["neo_hookean"]
+    design = Design((2.0, 6.0), 200.0, protocol="mode1", timing=(1.0, 1.0, 1))
+    theta = np.log10([0.03, 0.05, 0.4, 0.3])
+    data = time_curves(space, theta, design, 1e-3 * design.sigma_um(0.3))
+    rays = {q: space for q in design.probes_mm}
+    at_truth = evaluate_time_fit(TimeCurveModel(rays, data, terms=1), theta)
+    assert at_truth.chi2 == pytest.approx(0.0, abs=1e-12)
+    independent = np.array(laplace_intervals(rays, data, at_truth, correlated=False)["sd_log10"])
+    rng = np.random.default_rng(0)
+    estimates = []
+    for _ in range(40):
+        noisy = [replace(d, deflection_mm=d.deflection_mm + rng.normal(0.0, d.sd_mm))
+                 for d in data]
+        fit = fit_time_model(rays, noisy, terms=1, repeats=1, starts=[theta],
+                             window_focusing_options={"n_samples": 100, "max_iter": 3})
+        estimates.append(fit.theta)
+    ratio = np.std(estimates, axis=0, ddof=1) / independent
+    assert np.all((ratio > 0.7) & (ratio < 1.3)), ratio
+    # the design's intervals carry the correlated model-error term too: wider
+    correlated = np.array(laplace_intervals(rays, data, at_truth)["sd_log10"])
+    assert np.all(correlated >= independent)
+
+
+def test_mode1_on_the_2_mm_probe_alone_leaves_x1h_open_as_a_ramp_does(spaces):
+    skin = Box(x1d_mpa=0.04, x1h_ratio=0.01).draw(1, seed=0).iloc[0].to_dict()
+    rows = {}
+    for probes in [(2.0,), (2.0, 6.0)]:
+        d = Design(probes, 300.0, protocol="mode1")
+        rows[probes] = predict_skin(skin, d, spaces, Settings())
+    assert not rows[(2.0,)]["X1h_bounded"]
+    assert rows[(2.0, 6.0)]["X1h_bounded"] and rows[(2.0, 6.0)]["X1h_halfwidth"] < 0.2
+    assert rows[(2.0, 6.0)]["tau_1_bounded"] and rows[(2.0, 6.0)]["g_1_bounded"]
+    assert "causes are not predicted for time curves" in rows[(2.0, 6.0)]["notes"]
+
+
+def test_the_command_predicts_mode1_and_mode2_beside_the_ramp(tmp_path, capsys):
+    from skinsuction.cli import main
+
+    out = tmp_path / "design"
+    code = main(["design", "--out", str(out), "--n-skins", "3", "--probes", "2+6",
+                 "--suction", "100", "--protocols", "ramp", "mode1", "mode2",
+                 "--mode1", "2,2,3", "--mode2-rate", "50", "--precision", "tau_1=0.5",
+                 "--x1d", "0.02", "0.06", "--no-figure"])
+    assert code == 0
+    assert "recommended: 2+6 mm, mode 1 at 100 mbar (2 s on, 2 s off, 3 cycles)" in \
+        capsys.readouterr().out
+    table = pd.read_csv(out / "designs.csv")
+    assert list(table["design"]) == ["2+6 mm, 100 mbar",
+                                     "2+6 mm, mode 1 at 100 mbar (2 s on, 2 s off, 3 cycles)",
+                                     "2+6 mm, mode 2 to 100 mbar (50 mbar/s)"]
+    assert np.isnan(table["tau_1_median"].iloc[0])  # a ramp does not see the spectrum
+    assert np.isfinite(table["tau_1_median"].iloc[1])
+    assert "causes are not predicted for time curves" in (out / "design.md").read_text()
+    assert main(["design", "--out", str(out), "--mode1", "3,3"]) == 2
+    assert "expected ON,OFF,CYCLES" in capsys.readouterr().err

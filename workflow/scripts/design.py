@@ -14,7 +14,9 @@ with job(snakemake.log[0], threads=snakemake.threads):
     skins = Box.from_config(s.get("box")).draw(s.get("skins", 40), s.get("seed", 0))
     designs = designs_from(s["probes"], s["suction_mbar"], noise_um=s.get("noise_um", 2.0),
                            resolution_mm=s.get("resolution_mm", 0.01),
-                           given=s.get("given", {}))
+                           given=s.get("given", {}),
+                           protocols=s.get("protocols", ["ramp"]),
+                           timing=s.get("timing"), sample_hz=s.get("sample_hz", 100.0))
     q = s.get("question", {})
     question = Question(dict(q.get("precision", {})), tuple(q.get("tell", ())),
                         q.get("quantile", 0.9), q.get("rate", 0.95))

@@ -4,7 +4,8 @@
 
     skinsuction design --out DIR [--skins curves.parquet | --x1d 0.007 0.09 ...] \\
         [--probes 2 6 2+6 4+8] [--suction 100 300 500] [--precision X1h=0.2] \\
-        [--tell pre_tension hypodermis_thickness] [--given t_d=0.1]
+        [--tell pre_tension hypodermis_thickness] [--given t_d=0.1] \\
+        [--protocols ramp mode1 mode2] [--mode1 3,3,2] [--mode2-rate 25]
 
 The work is :func:`skinsuction.design.run_design`; this module only takes the
 arguments and prints the recommendation.
@@ -24,8 +25,9 @@ HELP = "plan a measurement: the probes and suction that answer a question, befor
 
 DESCRIPTION = (
     "Predict, for a box of plausible skins (or the skins of a study's table) and "
-    "candidate designs (probe sets, a ramp's suction, noise, 0.01 mm resolution, "
-    "thicknesses given), the 95 % interval of X1d and X1h (median and 90th "
+    "candidate designs (probe sets, a ramp's suction or mode 1 and mode 2 time curves, "
+    "noise, 0.01 mm resolution, thicknesses given), the 95 % interval of X1d and X1h "
+    "(and of the relaxation spectrum's g and tau for time curves; median and 90th "
     "percentile over the skins, the fraction bounded), each cause's detectable "
     "fraction and each pair's attribution ceiling; computed from the simulated "
     "spaces on noise-free curves, no FE run. Recommends the design with the fewest "
@@ -45,6 +47,18 @@ def _pair(text: str) -> tuple:
     if not v > 0:
         raise argparse.ArgumentTypeError(f"{text!r}: the value must be > 0")
     return key.strip(), v
+
+
+def _timing(text: str) -> tuple:
+    try:
+        on, off, cycles = (float(x) for x in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected ON,OFF,CYCLES (e.g. 3,3,2), got {text!r}") \
+            from None
+    if not (on > 0 and off > 0 and cycles >= 1 and cycles == int(cycles)):
+        raise argparse.ArgumentTypeError(f"{text!r}: on and off must be > 0 s, cycles a "
+                                         "whole number >= 1")
+    return on, off, cycles
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -76,6 +90,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                      help="dermis thickness range in mm (default the paper's 1 mm)")
     box.add_argument("--hypodermis-mm", nargs=2, type=positive, metavar=("LO", "HI"),
                      default=None, help="hypodermis thickness range in mm (default 1 mm)")
+    box.add_argument("--g", nargs=2, type=positive, metavar=("LO", "HI"), default=None,
+                     help="relaxation fraction g of a one-term spectrum, for mode 1 and "
+                          "mode 2 designs (default 0.1 1)")
+    box.add_argument("--tau", nargs=2, type=positive, metavar=("LO", "HI"), default=None,
+                     help="its relaxation time in s (default 0.1 1)")
     box.add_argument("--n-skins", type=positive_int, default=40,
                      help="skins drawn from the box (default 40)")
     add_seed(p, help="seed of the skins drawn (default 0)")
@@ -86,6 +105,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     d.add_argument("--suction", nargs="+", type=positive, default=[100.0, 300.0, 500.0],
                    metavar="MBAR", help="ramp tops, 0 to it in 2 mbar steps (default 100 300 "
                                         "500)")
+    d.add_argument("--protocols", nargs="+", choices=["ramp", "mode1", "mode2"],
+                   default=["ramp"], help="a quasi-static ramp (default), and/or the "
+                   "Cutometer's mode 1 (hold and release at the suction) and mode 2 (up "
+                   "and down to it) time curves")
+    d.add_argument("--mode1", type=_timing, default=None, metavar="ON,OFF,CYCLES",
+                   help="mode 1's timing: seconds on, seconds off, cycles (default 3,3,2)")
+    d.add_argument("--mode2-rate", type=positive, default=None, metavar="MBAR_S",
+                   help="mode 2's loading rate in mbar/s (default 25)")
+    d.add_argument("--sample-hz", type=positive, default=100.0,
+                   help="the time curves' sampling rate (default 100 Hz)")
     d.add_argument("--noise-um", type=float, default=2.0,
                    help="noise sd of one deflection in µm (default 2)")
     d.add_argument("--resolution-mm", type=float, default=0.01,
@@ -131,11 +160,17 @@ def run(args: argparse.Namespace) -> int:
         else:
             box = Box(**{k: v for k, v in (("x1d_mpa", args.x1d), ("x1h_ratio", args.ratio),
                                            ("t_d_mm", args.dermis_mm),
-                                           ("t_h_mm", args.hypodermis_mm)) if v is not None})
+                                           ("t_h_mm", args.hypodermis_mm), ("g", args.g),
+                                           ("tau_s", args.tau)) if v is not None})
             skins = box.draw(args.n_skins, args.seed)
             source = f"{args.n_skins} drawn from the box, seed {args.seed}"
+        timing = {k: v for k, v in (("mode1", args.mode1),
+                                    ("mode2", args.mode2_rate and (args.mode2_rate,)))
+                  if v}
         designs = designs_from(args.probes, args.suction, noise_um=args.noise_um,
-                               resolution_mm=args.resolution_mm, given=dict(args.given))
+                               resolution_mm=args.resolution_mm, given=dict(args.given),
+                               protocols=args.protocols, timing=timing,
+                               sample_hz=args.sample_hz)
         question = Question(dict(args.precision), tuple(args.tell), args.quantile, args.rate)
     except (ValueError, FileNotFoundError, OSError) as err:
         raise CLIError(str(err)) from None

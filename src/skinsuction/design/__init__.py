@@ -8,6 +8,8 @@ given), :func:`run_design` predicts from the simulated spaces, without FE runs:
 * the 95 % interval of X1d and X1h (median and upper quantile of its relative
   half-width over the skins) and the fraction of skins where it is bounded;
 * each cause's detectable fraction, and each pair's attribution ceiling;
+* for mode 1 and mode 2 designs (the Cutometer's time curves), the intervals of the
+  long-time moduli and of a one-term relaxation spectrum (g, tau);
 
 and recommends the design with the fewest probes, then the lowest suction, that
 meets the :class:`Question` (or says that none does, and offers the best).
@@ -33,11 +35,13 @@ X1h open, the 2 + 6 mm pair bounds it:
 
 from ._box import CAUSE_COLUMNS, Box, Design, Question, designs_from, skins_from_table
 from ._check import CHECK_CAUSES, check_skin, check_summary, measure_skin, parse_design
-from ._predict import predict_skin, relative_halfwidth
+from ._box import relative_halfwidth
+from ._predict import predict_skin
+from ._predict_time import predict_time, time_curves
 from ._run import predict_designs, run_design
 from ._summary import design_markdown, recommend, summarize
 
 __all__ = ["Box", "Design", "Question", "designs_from", "skins_from_table", "CAUSE_COLUMNS",
            "predict_skin", "relative_halfwidth", "predict_designs", "run_design",
            "summarize", "recommend", "design_markdown", "CHECK_CAUSES", "check_skin",
-           "check_summary", "measure_skin", "parse_design"]
+           "check_summary", "measure_skin", "parse_design", "predict_time", "time_curves"]

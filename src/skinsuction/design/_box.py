@@ -17,11 +17,36 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-__all__ = ["Box", "Design", "Question", "designs_from", "skins_from_table", "CAUSE_COLUMNS"]
+__all__ = ["Box", "Design", "Question", "designs_from", "skins_from_table", "CAUSE_COLUMNS",
+           "relative_halfwidth"]
+
+#: A protocol's timing defaults: mode 1 (on s, off s, cycles), mode 2 (rate, mbar/s)
+TIMING = {"ramp": (), "mode1": (3.0, 3.0, 2.0), "mode2": (25.0,)}
 
 #: Each cause's drawn column: its parameter (as the cause's space reads it).
 CAUSE_COLUMNS = {"strain_stiffening": "x2d_ratio", "pre_tension": "lambda0",
                  "hypodermis_thickness": "t_h_cause_mm", "dermis_thickness": "t_d_cause_mm"}
+
+
+def relative_halfwidth(symbol: str, value: float, interval) -> tuple:
+    """``(half-width, bounded)``: the interval's larger side over the value (lambda0:
+    over its strain, lambda0 - 1); unbounded (inf) where an end is open.
+
+    >>> from types import SimpleNamespace as NS
+    >>> relative_halfwidth("X1h", 2.0, NS(lower=1.5, upper=2.6, lower_open=False, upper_open=False))
+    (0.3, True)
+    >>> relative_halfwidth("lambda0", 1.1, NS(lower=1.05, upper=1.12, lower_open=False,
+    ...                                       upper_open=True))
+    (inf, False)
+    """
+    if interval is None:
+        return math.nan, False
+    shift = 1.0 if symbol == "lambda0" else 0.0
+    v, lo, hi = value - shift, interval.lower - shift, interval.upper - shift
+    bounded = not (interval.lower_open or interval.upper_open)
+    if not bounded:
+        return math.inf, False
+    return round(float(max(hi / v - 1.0, 1.0 - lo / v)), 12), True
 
 
 def _range(value, key) -> tuple:
@@ -47,6 +72,9 @@ class Box:
     causes : dict name -> (lo, hi)
         Each cause's parameter: X2d/X1d, lambda0, t_h or t_d (mm) of the thickness
         causes.
+    g, tau_s : (lo, hi)
+        The one-term relaxation spectrum of a mode 1 or mode 2 design (log-uniform;
+        default g 0.1-1, tau 0.1-1 s: the creep of forearm skin within 2-3 s holds).
 
     Examples
     --------
@@ -64,9 +92,11 @@ class Box:
     causes: dict = field(default_factory=lambda: {
         "strain_stiffening": (2.0, 30.0), "pre_tension": (1.03, 1.15),
         "hypodermis_thickness": (2.0, 6.0), "dermis_thickness": (0.6, 1.6)})
+    g: tuple = (0.1, 1.0)
+    tau_s: tuple = (0.1, 1.0)
 
     def __post_init__(self):
-        for key in ("x1d_mpa", "x1h_ratio", "t_d_mm", "t_h_mm"):
+        for key in ("x1d_mpa", "x1h_ratio", "t_d_mm", "t_h_mm", "g", "tau_s"):
             object.__setattr__(self, key, _range(getattr(self, key), key))
         unknown = sorted(set(self.causes) - set(CAUSE_COLUMNS))
         if unknown:
@@ -97,6 +127,12 @@ class Box:
         for name, r in self.causes.items():
             draw = rng.uniform(*r, n) if name == "pre_tension" else log_uniform(r)
             out[CAUSE_COLUMNS[name]] = draw
+        # the spectrum from a stream of its own: the skins of a seed stay those drawn
+        # before it was added
+        spectrum = np.random.default_rng([seed, 1])
+        for key, col in (("g", "g_1"), ("tau_s", "tau_1_s")):
+            lo, hi = getattr(self, key)
+            out[col] = 10 ** spectrum.uniform(math.log10(lo), math.log10(hi), n)
         return pd.DataFrame(out)
 
 
@@ -156,12 +192,22 @@ class Design:
     given : dict
         Thicknesses given (``t_d``, ``t_h``) -> their sd (mm).
     step_mbar : float
+        The ramp's pressure step.
+    protocol : {"ramp", "mode1", "mode2"}
+        A quasi-static ramp (the paper's), or the Cutometer's time curves: mode 1
+        holds ``max_mbar`` and releases it (``timing`` = on s, off s, cycles; default
+        3, 3, 2), mode 2 ramps up to it and down (``timing`` = rate in mbar/s;
+        default 25), both recorded at ``sample_hz``.
+    timing : tuple
+    sample_hz : float
 
     Examples
     --------
     >>> d = Design((2.0, 6.0), 300.0, given={"t_d": 0.1})
     >>> d.name, d.points, round(d.sigma_um(0.3), 2)
     ('2+6 mm, 300 mbar, t_d given', 151, 3.52)
+    >>> Design((6.0,), 450.0, protocol="mode1").name
+    '6 mm, mode 1 at 450 mbar (3 s on, 3 s off, 2 cycles)'
     """
 
     probes_mm: tuple
@@ -170,8 +216,21 @@ class Design:
     resolution_mm: float = 0.01
     given: dict = field(default_factory=dict)
     step_mbar: float = 2.0
+    protocol: str = "ramp"
+    timing: tuple = ()
+    sample_hz: float = 100.0
 
     def __post_init__(self):
+        if self.protocol not in TIMING:
+            raise ValueError(f"design: the protocol must be one of {sorted(TIMING)}, not "
+                             f"{self.protocol!r}")
+        timing = tuple(float(x) for x in (self.timing or TIMING[self.protocol]))
+        if len(timing) != len(TIMING[self.protocol]) or not all(x > 0 for x in timing):
+            raise ValueError(f"design: {self.protocol} timing must be "
+                             f"{len(TIMING[self.protocol])} positive numbers, got {self.timing}")
+        object.__setattr__(self, "timing", timing)
+        if self.protocol != "ramp" and not self.sample_hz > 0:
+            raise ValueError("design: sample_hz must be > 0")
         probes = tuple(sorted(float(p) for p in self.probes_mm))
         if not probes or any(p not in (2.0, 4.0, 6.0, 8.0) for p in probes):
             raise ValueError(f"design: probes must be among 2, 4, 6, 8 mm, got {self.probes_mm}")
@@ -188,8 +247,41 @@ class Design:
     @property
     def name(self) -> str:
         given = " + ".join(f"{k} given" for k in ("t_d", "t_h") if k in self.given)
-        return (f"{'+'.join(f'{p:g}' for p in self.probes_mm)} mm, {self.max_mbar:g} mbar"
-                + (f", {given}" if given else ""))
+        probes = f"{'+'.join(f'{p:g}' for p in self.probes_mm)} mm"
+        if self.protocol == "mode1":
+            on, off, n = self.timing
+            load = (f"mode 1 at {self.max_mbar:g} mbar ({on:g} s on, {off:g} s off, "
+                    f"{n:g} cycles)")
+        elif self.protocol == "mode2":
+            load = f"mode 2 to {self.max_mbar:g} mbar ({self.timing[0]:g} mbar/s)"
+        else:
+            load = f"{self.max_mbar:g} mbar"
+        return f"{probes}, {load}" + (f", {given}" if given else "")
+
+    def history(self) -> tuple:
+        """``(time_s, pressure_mbar, phase)`` of a mode 1 or mode 2 design, sampled at
+        ``sample_hz``; the phase of each sample as the time fits label it (``rest``,
+        ``on``, ``release``: the first 0.1 s after a release, ``off``, ``ramp``)."""
+        from skinsuction.identify import RELEASE_S
+        from skinsuction.viscoelastic import mode1_history, mode2_history
+
+        if self.protocol == "mode1":
+            on, off, n = self.timing
+            h = mode1_history(self.max_mbar, on_s=on, off_s=off, cycles=int(n))
+        elif self.protocol == "mode2":
+            h = mode2_history(self.max_mbar, rate_mbar_s=self.timing[0])
+        else:
+            raise ValueError("a ramp design has no time history")
+        t = np.arange(0.0, h.times_s[-1] + 0.5 / self.sample_hz, 1.0 / self.sample_hz)
+        p = np.interp(t, h.times_s, h.pressure_mbar)
+        if self.protocol == "mode2":
+            phase = np.full(t.size, "ramp", dtype=object)
+        else:
+            rel = np.mod(t - 1e-9, on + off)
+            phase = np.where(rel < on, "on", np.where(rel < on + RELEASE_S, "release", "off"))
+            phase = phase.astype(object)
+        phase[0] = "rest"
+        return t, p, phase
 
     @property
     def points(self) -> int:
@@ -206,8 +298,9 @@ class Design:
 
 
 def designs_from(probe_sets, suctions, *, noise_um=2.0, resolution_mm=0.01, given=None,
-                 step_mbar=2.0) -> list:
-    """Every probe set at every suction.
+                 step_mbar=2.0, protocols=("ramp",), timing=None, sample_hz=100.0) -> list:
+    """Every probe set at every suction, in every protocol (``timing``: protocol ->
+    its timing, where not the default).
 
     >>> [d.name for d in designs_from(["2", "2+6"], [100, 500])]
     ['2 mm, 100 mbar', '2 mm, 500 mbar', '2+6 mm, 100 mbar', '2+6 mm, 500 mbar']
@@ -216,9 +309,11 @@ def designs_from(probe_sets, suctions, *, noise_um=2.0, resolution_mm=0.01, give
     for s in probe_sets:
         probes = tuple(float(x) for x in str(s).replace(",", "+").split("+")) \
             if not isinstance(s, (tuple, list)) else tuple(s)
-        for p in suctions:
-            out.append(Design(probes, float(p), noise_um, resolution_mm, dict(given or {}),
-                              step_mbar))
+        for protocol in protocols:
+            for p in suctions:
+                out.append(Design(probes, float(p), noise_um, resolution_mm, dict(given or {}),
+                                  step_mbar, protocol, tuple((timing or {}).get(protocol, ())),
+                                  sample_hz))
     return out
 
 

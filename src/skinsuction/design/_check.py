@@ -20,8 +20,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from ._box import CAUSE_COLUMNS, designs_from
-from ._predict import predict_skin, relative_halfwidth
+from ._box import CAUSE_COLUMNS, designs_from, relative_halfwidth
+from ._predict import predict_skin
 
 CHECK_CAUSES = ("pre_tension", "hypodermis_thickness", "strain_stiffening")
 #: the given thicknesses' header keys of a measured CSV

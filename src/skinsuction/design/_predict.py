@@ -25,30 +25,9 @@ import numpy as np
 
 from skinsuction.space import BASELINE
 
-from ._box import CAUSE_COLUMNS, Design
+from ._box import CAUSE_COLUMNS, Design, relative_halfwidth
 
-__all__ = ["predict_skin", "relative_halfwidth"]
-
-
-def relative_halfwidth(symbol: str, value: float, interval) -> tuple:
-    """``(half-width, bounded)``: the interval's larger side over the value (lambda0:
-    over its strain, lambda0 - 1); unbounded (inf) where an end is open.
-
-    >>> from types import SimpleNamespace as NS
-    >>> relative_halfwidth("X1h", 2.0, NS(lower=1.5, upper=2.6, lower_open=False, upper_open=False))
-    (0.3, True)
-    >>> relative_halfwidth("lambda0", 1.1, NS(lower=1.05, upper=1.12, lower_open=False,
-    ...                                       upper_open=True))
-    (inf, False)
-    """
-    if interval is None:
-        return math.nan, False
-    shift = 1.0 if symbol == "lambda0" else 0.0
-    v, lo, hi = value - shift, interval.lower - shift, interval.upper - shift
-    bounded = not (interval.lower_open or interval.upper_open)
-    if not bounded:
-        return math.inf, False
-    return round(float(max(hi / v - 1.0, 1.0 - lo / v)), 12), True
+__all__ = ["predict_skin"]
 
 
 #: Loaded points per probe the predictions evaluate: a ramp's noise-free chi^2 is a
@@ -142,6 +121,12 @@ def predict_skin(skin: dict, design: Design, spaces: dict, settings, *, causes=(
     sp, notes = spaces_at(chosen, design.probes_mm, geometry, on_demand,
                           solve_causes=solve_rays)
     row["notes"] = "; ".join(notes)
+    if design.protocol != "ramp":  # mode 1 or 2: the time model's intervals, no causes
+        from ._predict_time import predict_time, time_notes
+
+        row.update(predict_time(skin, design, sp[BASELINE], settings))
+        row["notes"] = "; ".join([*notes, *time_notes(design), row.get("notes", "")]).strip("; ")
+        return row
     sigma = design.sigma_um(settings.model_error_um)
     theta = np.array([math.log10(float(skin["x1d_mpa"])), math.log10(float(skin["x1h_ratio"]))])
     fd, full = _fit_data(sp[BASELINE], theta, design, sigma)

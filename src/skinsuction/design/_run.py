@@ -118,6 +118,11 @@ def run_design(skins: pd.DataFrame, designs: list, question: Question, out_dir, 
     summary = summarize(rows, designs, causes, question.quantile)
     choice = recommend(summary, question)
     notes = _notes(rows, layered, solve_rays, causes)
+    if any(d.protocol != "ramp" for d in designs):
+        from ._predict_time import time_notes
+
+        timed = next(d for d in designs if d.protocol != "ramp")
+        notes += time_notes(timed, "Mode 1 and mode 2 designs")
     header = (f"{len(skins)} skins ({source}), {len(designs)} designs; "
               f"space: {src.info()['description']}.")
     out = Path(out_dir)

@@ -12,6 +12,14 @@ from ._box import Question
 __all__ = ["summarize", "recommend", "design_markdown"]
 
 PARAMETERS = ("X1d", "X1h")
+#: a mode 1 or mode 2 design's spectrum (one Prony term), beside the moduli
+SPECTRUM_PARAMETERS = ("g_1", "tau_1")
+
+
+def _parameters(frame) -> tuple:
+    """X1d, X1h, and the spectrum's where some design of ``frame`` predicts it."""
+    return PARAMETERS + tuple(p for p in SPECTRUM_PARAMETERS
+                              if any(c.startswith(f"{p}_") for c in frame.columns))
 
 
 def _ceiling(gap) -> np.ndarray:
@@ -40,7 +48,9 @@ def summarize(rows: pd.DataFrame, designs: list, causes=(), quantile: float = 0.
         r = {"design": d.name, "probes": len(d.probes_mm), "max_mbar": d.max_mbar,
              "given": "+".join(sorted(d.given)), "skins": len(g),
              "beyond_space": float(g["beyond_space"].mean()) if len(g) else math.nan}
-        for p in PARAMETERS:
+        for p in _parameters(rows):
+            if p in SPECTRUM_PARAMETERS and d.protocol == "ramp":
+                continue  # a ramp does not see the spectrum: not predicted
             w = g[f"{p}_halfwidth"].where(~g["beyond_space"], np.inf).astype(float) \
                 if f"{p}_halfwidth" in g else pd.Series(np.inf, index=g.index)
             r[f"{p}_median"] = float(w.median()) if len(w) else math.nan
@@ -74,7 +84,7 @@ def _shortfalls(row, question: Question) -> list:
     out = []
     for p, target in question.precision.items():
         w = row.get(f"{p}_quantile", math.nan)
-        if p not in PARAMETERS:  # a cause's parameter: its median over the detectable skins
+        if p not in PARAMETERS + SPECTRUM_PARAMETERS:  # a cause's: its median where detectable
             w = row.get(f"{p}_median", math.nan)
         short = (w / target - 1.0) if np.isfinite(w) else math.inf
         out.append((f"{p} ±{100 * target:g} %", short))
@@ -142,16 +152,17 @@ def design_markdown(summary: pd.DataFrame, question: Question, choice: dict, cau
 
     lines += [""] + [f"- {k}: {status(s)}" for k, s in choice["criteria"].items()] + [""]
     pct = f"{100 * question.quantile:g}th pct"
-    head = ["design", "beyond the space"] + [f"{p}: median, {pct}, bounded"
-                                             for p in PARAMETERS]
+    params = _parameters(summary)
+    head = ["design", "beyond the space"] + [f"{p}: median, {pct}, bounded" for p in params]
     head += [f"{c}: detectable, ceiling (nearest rival)" for c in causes]
     pairs = [(a, b) for a in causes for b in causes if a != b]
     head += [f"ceiling {a} vs {b}" for a, b in pairs]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for _, r in summary.iterrows():
         cells = [r["design"], f"{100 * r['beyond_space']:.0f} %"]
-        cells += [f"{_fmt(r[f'{p}_median'])}, {_fmt(r[f'{p}_quantile'])}, "
-                  f"{100 * r[f'{p}_bounded']:.0f} %" for p in PARAMETERS]
+        cells += ["–" if not np.isfinite(r.get(f"{p}_bounded", math.nan))
+                  else f"{_fmt(r[f'{p}_median'])}, {_fmt(r[f'{p}_quantile'])}, "
+                  f"{100 * r[f'{p}_bounded']:.0f} %" for p in params]
         cells += ["–" if not np.isfinite(r.get(f"{c}_detectable", math.nan))
                   else f"{100 * r[f'{c}_detectable']:.0f} %, "
                   + ("–" if not np.isfinite(r.get(f"{c}_ceiling", math.nan))

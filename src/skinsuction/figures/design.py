@@ -15,6 +15,8 @@ from ._style import WIDTH_IN, panel_label, plt, save, style
 __all__ = ["plot_design_precision"]
 
 PARAMETERS = ("X1d", "X1h")
+#: mode 1 and mode 2 designs' spectrum (a ramp's is not predicted: no marker)
+SPECTRUM = ("g_1", "tau_1")
 
 
 def plot_design_precision(summary, question, path):
@@ -33,10 +35,12 @@ def plot_design_precision(summary, question, path):
     """
     names = list(summary["design"])
     x = np.arange(len(names))
+    params = PARAMETERS + tuple(p for p in SPECTRUM if f"{p}_median" in summary)
     with style():
-        fig, axes = plt.subplots(1, len(PARAMETERS), figsize=(WIDTH_IN, 0.45 * WIDTH_IN),
-                                 sharey=True)
-        for k, (ax, p) in enumerate(zip(axes, PARAMETERS)):
+        fig, axes = plt.subplots(1, len(params), figsize=(WIDTH_IN, 0.45 * WIDTH_IN),
+                                 sharey=True, squeeze=False)
+        axes = axes[0]
+        for k, (ax, p) in enumerate(zip(axes, params)):
             med = 100 * summary[f"{p}_median"].to_numpy(float)
             top = 100 * summary[f"{p}_quantile"].to_numpy(float)
             finite = np.concatenate([med[np.isfinite(med)], top[np.isfinite(top)]])
@@ -46,7 +50,7 @@ def plot_design_precision(summary, question, path):
             ax.plot(x, med_d, "o", color="#4a6fa5", label="median")
             ax.plot(x, top_d, "_", ms=12, color="#4a6fa5",
                     label=f"{100 * question.quantile:g}th percentile")
-            open_ = ~np.isfinite(top)
+            open_ = np.isinf(top)
             ax.plot(x[open_], np.full(open_.sum(), cap), "^", color="#d1495b",
                     label="open (space edge)")
             if p in question.precision:

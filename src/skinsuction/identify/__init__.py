@@ -73,8 +73,8 @@ from ._surrogate import (
     write_surrogate_space,
 )
 from ._time_correction import fe_corrected_fit, fe_time_curve, time_fit_skin
-from ._time_fit import (MODEL_ERROR_LAYERS, TimeCurveModel, TimeFit, TimeFitData, fit_data_of,
-                        fit_time_model)
+from ._time_fit import (MODEL_ERROR_LAYERS, RELEASE_S, TimeCurveModel, TimeFit, TimeFitData,
+                        evaluate_time_fit, fit_data_of, fit_time_model, time_fit_data)
 from ._time_intervals import laplace_intervals, time_bound_flags
 from ._window_focusing import (
     IdentificationError,
@@ -112,6 +112,9 @@ __all__ = [
     "TimeCurveModel",
     "MODEL_ERROR_LAYERS",
     "fit_data_of",
+    "time_fit_data",
+    "RELEASE_S",
+    "evaluate_time_fit",
     "laplace_intervals",
     "time_bound_flags",
     "BOUND_FRACTION",

@@ -54,7 +54,8 @@ from ._time_model import (
 )
 
 __all__ = ["MODEL_ERROR", "MODEL_ERROR_LAYERS", "STRAIN_SLOPE", "TIME_WF", "TIME_POLISH", "TimeFitData", "TimeFit", "TimeCurveModel",
-           "TimeObjective", "evaluate_time_fit", "fit_data_of", "fit_time_model"]
+           "TimeObjective", "evaluate_time_fit", "fit_data_of", "fit_time_model",
+           "time_fit_data"]
 
 #: The fast path's model error as an sd, fraction of the curve's largest deflection,
 #: per phase: "on" (suction on), "release" (the first 0.1 s after a step's release),
@@ -162,10 +163,38 @@ def fit_data_of(curve, *, noise_sd_mm: float | None = None, model_error: dict | 
     if not sigma > 0:
         raise ValueError(f"{curve.label}: the noise sd must be positive (the curve shows "
                          "none: give it, --noise-um)")
+    used = None if phases == "all" else np.isin(phase, ["rest", "on", "ramp"])
+    return time_fit_data(curve.label, curve.probe_mm, curve.time_s, p, d, phase, sigma,
+                         model_error=model_error, used=used, notes=(note,),
+                         resolution_mm=float(getattr(curve, "resolution_mm", None)
+                                             or _grid_step(d)))
+
+
+def time_fit_data(label, probe_mm, time_s, pressure_mbar, deflection_mm, phase, noise_sd_mm,
+                  *, model_error=None, used=None, notes=(), resolution_mm=0.0) -> TimeFitData:
+    """A :class:`TimeFitData` from its arrays: each point's sd is the noise, the fast
+    path's error in its phase and the space's accuracy (what :func:`fit_data_of` does
+    for a loaded curve; a design's noise-free curves use it too).
+
+    Parameters
+    ----------
+    phase : array of str
+        ``rest``, ``on``, ``release``, ``off`` or ``ramp`` per point.
+    noise_sd_mm : float
+        The noise sd of one deflection (mm), > 0.
+    model_error : dict, optional
+        Fractions per phase; default :data:`MODEL_ERROR`, raised with the curve's strain
+        (:data:`STRAIN_SLOPE`).
+    used : array of bool, optional
+        The points in the likelihood (default all).
+    """
+    d = np.asarray(deflection_mm, dtype=float)
+    phase = np.asarray(phase, dtype=object)
+    sigma = float(noise_sd_mm)
     scale = float(np.percentile(np.abs(d), 99.5))
     if model_error is None:
         # the fast path's error grows with the strain (STRAIN_SLOPE)
-        strain = scale / (0.5 * float(curve.probe_mm))
+        strain = scale / (0.5 * float(probe_mm))
         fractions = {k: max(v, STRAIN_SLOPE.get(k, 0.0) * strain)
                      for k, v in MODEL_ERROR.items()}
     else:
@@ -176,11 +205,11 @@ def fit_data_of(curve, *, noise_sd_mm: float | None = None, model_error: dict | 
 
     sd = np.sqrt(sigma ** 2 + (f * scale) ** 2 + (MODEL_ERROR_RELATIVE * d) ** 2
                  + MODEL_ERROR_MM ** 2 * (phase != "rest"))
-    used = np.ones(d.size, bool) if phases == "all" else np.isin(phase, ["rest", "on", "ramp"])
-    t = np.asarray(curve.time_s, dtype=float)
-    return TimeFitData(curve.label, float(curve.probe_mm), t, p, d, sd, phase, sigma, scale,
-                       used, pressure_breaks(t, p), (note,), fractions,
-                       float(getattr(curve, "resolution_mm", None) or _grid_step(d)))
+    used = np.ones(d.size, bool) if used is None else np.asarray(used, bool)
+    t = np.asarray(time_s, dtype=float)
+    p = np.asarray(pressure_mbar, dtype=float)
+    return TimeFitData(label, float(probe_mm), t, p, d, sd, phase, sigma, scale, used,
+                       pressure_breaks(t, p), tuple(notes), fractions, float(resolution_mm))
 
 
 def _grid_step(d) -> float:
