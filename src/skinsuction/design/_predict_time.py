@@ -4,8 +4,9 @@ Fisher information on noise-free curves.
 The skin's time curves are the viscoelastic fast path's (the identification's own
 model, :class:`~skinsuction.identify.TimeCurveModel`: the space's neo-Hookean rays
 driven by the effective pressure of a one-term spectrum) at the design's suction
-history, sampled at its rate; each point's sd is the identification's (the noise and
-rounding, the fast path's error per phase, the space's accuracy).  At the truth, the
+history, sampled at its rate; each point's sd is the identification's (the noise, the
+fast path's error per phase, the space's accuracy), and the reading step's rounding
+enters as the identification's correlated rounding terms.  At the truth, the
 Gauss-Newton intervals of :func:`~skinsuction.identify.laplace_intervals` (the ones
 ``identify`` reports for time curves, with its correlated model-error term) are the
 intervals a typical measurement gets.
@@ -13,6 +14,7 @@ intervals a typical measurement gets.
 
 from __future__ import annotations
 
+import math
 from types import SimpleNamespace
 
 import numpy as np
@@ -47,7 +49,9 @@ def predict_time(skin: dict, design, space, settings) -> dict:
     truth = {"X1d": x1d, "X1h": x1d * float(skin["x1h_ratio"])}
     truth.update({k: float(skin[col]) for k, col in SPECTRUM.items()})
     theta = np.log10([x1d, float(skin["x1h_ratio"]), truth["g_1"], truth["tau_1"]])
-    sigma_mm = 1e-3 * design.sigma_um(settings.model_error_um)
+    # the noise alone: the identification of time curves models the reading step's
+    # rounding as correlated terms of its own (rounding_terms), not as white noise
+    sigma_mm = 1e-3 * math.hypot(design.noise_um, settings.model_error_um)
     data = time_curves(space, theta, design, sigma_mm)
     if not all(np.isfinite(d.deflection_mm).all() for d in data):
         return {"beyond_space": True, "notes": (
