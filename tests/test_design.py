@@ -249,7 +249,12 @@ def test_the_checks_summary_counts_the_named_the_tied_and_the_wrong():
     lines = "\n".join(check_summary(rows, ("pre_tension",)))
     assert "5 skins, 1 beyond the space" in lines
     assert "over the 3 predicted detectable: ceiling 1.00, named right 1/3" in lines
-    assert "right or tied 0.67, wrong and not tied 1/3" in lines
+    assert "right or tied 0.67, wrong and not tied 1/3, no cause found 0/3" in lines
+    # a detectable skin left at neo_hookean_fits is a miss, not a wrong cause
+    rows.loc[2, ["real_pre_tension_verdict", "real_pre_tension_cause"]] = ["neo_hookean_fits",
+                                                                           "none"]
+    lines = "\n".join(check_summary(rows, ("pre_tension",)))
+    assert "wrong and not tied 0/3, no cause found 1/3" in lines
 
 
 # ------------------------------------------------------------------ mode 1 and mode 2

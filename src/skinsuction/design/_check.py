@@ -172,9 +172,12 @@ def _cause_lines(ok, c, attribution_ceiling) -> list:
         ceiling = attribution_ceiling(gaps.min(axis=1).astype(float)).mean()
         named = on[f"real_{c}_cause"] == c
         tied = on[f"real_{c}_tied"].fillna("").astype(str).str.len() > 0
+        # no cause found is a miss, not a wrong cause (the confusion rates' convention)
+        missed = on[f"real_{c}_verdict"] != "cause_found"
         lines.append(f"    over the {len(on)} predicted detectable: ceiling {ceiling:.2f}, "
                      f"named right {named.sum()}/{len(on)} = {named.mean():.2f} "
                      f"(sd {_binom(ceiling, len(on)):.2f}); right or tied "
                      f"{(named | tied).mean():.2f}, wrong and not tied "
-                     f"{(~named & ~tied).sum()}/{len(on)}")
+                     f"{(~named & ~tied & ~missed).sum()}/{len(on)}, no cause found "
+                     f"{missed.sum()}/{len(on)}")
     return lines
