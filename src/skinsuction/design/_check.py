@@ -125,9 +125,9 @@ def _predict_rays(design, spaces, on_demand):
     """The prediction's rays at given layers: the diagnosis's solver, or one of its own."""
     if not design.given or on_demand not in (None, True):
         return on_demand or None
-    from skinsuction.space import OnDemandRays
+    from skinsuction.space import BASELINE, OnDemandRays
 
-    return OnDemandRays(spaces["neo_hookean"].spec)
+    return OnDemandRays(spaces[BASELINE].spec)
 
 
 def _binom(p, n) -> float:
