@@ -34,7 +34,8 @@ X1h open, the 2 + 6 mm pair bounds it:
 """
 
 from ._box import CAUSE_COLUMNS, Box, Design, Question, designs_from, skins_from_table
-from ._check import CHECK_CAUSES, check_skin, check_summary, measure_skin, parse_design
+from ._check import (CHECK_CAUSES, check_skin, check_summary, measure_skin, parse_design,
+                     repredict)
 from ._box import relative_halfwidth
 from ._predict import predict_skin
 from ._predict_time import predict_time, time_curves
@@ -44,4 +45,5 @@ from ._summary import design_markdown, recommend, summarize
 __all__ = ["Box", "Design", "Question", "designs_from", "skins_from_table", "CAUSE_COLUMNS",
            "predict_skin", "relative_halfwidth", "predict_designs", "run_design",
            "summarize", "recommend", "design_markdown", "CHECK_CAUSES", "check_skin",
-           "check_summary", "measure_skin", "parse_design", "predict_time", "time_curves"]
+           "check_summary", "measure_skin", "parse_design", "repredict", "predict_time",
+           "time_curves"]

@@ -121,6 +121,33 @@ def check_skin(skin: dict, design, seed: int, spaces: dict, settings, *,
     return row
 
 
+def repredict(row: dict, design, spaces: dict, settings, *, causes=CHECK_CAUSES,
+              on_demand=False) -> dict:
+    """A row of :func:`check_skin` with its prediction made again, its measurements kept.
+
+    When only the prediction changed, its FE virtual experiments and diagnoses (the
+    ``real_*`` columns: the costly part, seeded) stand; the skin is the row's own
+    columns.
+
+    >>> from skinsuction.space import SHIPPED_SPACE_DIR, read_ray_spaces
+    >>> row = {"skin": 0, "x1d_mpa": 0.005, "x1h_ratio": 0.1, "pred_X1d_halfwidth": 9.0,
+    ...        "real_X1d_halfwidth": 0.01}
+    >>> new = repredict(row, parse_design("2@500"), read_ray_spaces(SHIPPED_SPACE_DIR),
+    ...                 None, causes=())
+    >>> new["pred_beyond_space"], "pred_X1d_halfwidth" in new, new["real_X1d_halfwidth"]
+    (True, False, 0.01)
+    """
+    skin = {k: v for k, v in row.items() if not k.startswith(("pred_", "real_"))
+            and k not in ("design", "seed", "predict_cpu_s")}
+    out = {k: v for k, v in row.items() if not k.startswith("pred_")}
+    t0 = time.process_time()
+    pred = predict_skin(skin, design, spaces, settings, causes=causes,
+                        on_demand=_predict_rays(design, spaces, on_demand))
+    out["predict_cpu_s"] = time.process_time() - t0
+    out.update({f"pred_{k}": v for k, v in pred.items() if k not in ("design", "skin")})
+    return out
+
+
 def _predict_rays(design, spaces, on_demand):
     """The prediction's rays at given layers: the diagnosis's solver, or one of its own."""
     if not design.given or on_demand not in (None, True):

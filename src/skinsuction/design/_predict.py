@@ -38,22 +38,28 @@ __all__ = ["predict_skin"]
 MAX_POINTS = 26
 
 
-def _fit_data(space, theta, design: Design, sigma_um: float) -> tuple:
+def _fit_data(space, theta, design: Design, sigma_um: float, space_error: bool) -> tuple:
     """The noise-free curves of ``space`` at ``theta`` as the design measures them
-    (thinned to :data:`MAX_POINTS` a probe, their sd scaled to keep the information)."""
-    from skinsuction.diagnose import FitData, ModelCurves
+    (thinned to :data:`MAX_POINTS` a probe, their sd scaled to keep the information),
+    with the spaces' correlated error and the discretisation's, at the truth's X1d, as
+    the diagnosis weighs them (``space_error``: its ``Settings.space_error``)."""
+    from skinsuction.diagnose import FitData, ModelCurves, with_space_error
 
     full = design.pressures()
     keep = np.unique(np.round(np.linspace(0, full.size - 1, min(MAX_POINTS, full.size)))
                      .astype(int))
     p = full[keep]
-    sigma_um = sigma_um * math.sqrt(p.size / full.size)  # the same n / sigma^2
+    scale = math.sqrt(p.size / full.size)
+    sigma_um = sigma_um * scale  # the same n / sigma^2
     blank = {q: FitData(q, p, np.zeros_like(p), sigma_um) for q in design.probes_mm}
     model = ModelCurves(space, blank)
     at = np.concatenate([theta, np.zeros(model.d - len(theta))])
     curves = model(at[None, :])
-    return {q: FitData(q, p, np.asarray(curves[q][0], float), sigma_um)
-            for q in design.probes_mm}, at
+    fd = {q: FitData(q, p, np.asarray(curves[q][0], float), sigma_um)
+          for q in design.probes_mm}
+    if space_error and all(np.isfinite(d.deflection_mm).all() for d in fd.values()):
+        fd = with_space_error(fd, 10.0 ** float(theta[0]), point_scale=scale)
+    return fd, at
 
 
 def _intervals(space, fd, theta, level) -> dict:
@@ -129,7 +135,7 @@ def predict_skin(skin: dict, design: Design, spaces: dict, settings, *, causes=(
         return row
     sigma = design.sigma_um(settings.model_error_um)
     theta = np.array([math.log10(float(skin["x1d_mpa"])), math.log10(float(skin["x1h_ratio"]))])
-    fd, full = _fit_data(sp[BASELINE], theta, design, sigma)
+    fd, full = _fit_data(sp[BASELINE], theta, design, sigma, settings.space_error)
     stops = [q for q, d in fd.items() if not np.isfinite(d.deflection_mm).all()]
     if stops:  # the rays stop before the ramp's top here (no FE equilibrium)
         row["beyond_space"] = True
@@ -163,7 +169,7 @@ def _cause_row(name, skin, sp, theta, design, sigma, settings) -> dict:
     coordinate = float(skin[CAUSE_COLUMNS[name]])  # X2d/X1d for stiffening, as its axis
     u = float(cause.to_axis(np.clip(coordinate, cause.lower, cause.upper)))
     th = np.concatenate([theta, [u]])
-    fd, full = _fit_data(space, th, design, sigma)
+    fd, full = _fit_data(space, th, design, sigma, settings.space_error)
     n = design.pressures().size * len(design.probes_mm)  # the BIC's n: points measured
     wf = settings.window_focusing
     base = fit_model(sp[BASELINE], fd, seed=0, repeats=1, window_focusing_options=wf)

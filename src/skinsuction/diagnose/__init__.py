@@ -43,7 +43,8 @@ from ._rule import decide
 from ._settings import Settings
 from ._steps import BeyondSpaceError
 from ._window import fit_in_window, ratio_window
-from ._fit import Fit, FitData, ModelCurves, fit_intervals, fit_model, nested_start
+from ._fit import (Fit, FitData, ModelCurves, fit_intervals, fit_model, nested_start,
+                   with_space_error)
 from ._report import write_report
 from ._stats import bic, misfit_test, noise_from_differences, noise_from_replicates
 from ._time import VISCOELASTIC_CREEP, diagnose_time_data, diagnose_time_file, write_time_report
@@ -54,6 +55,7 @@ __all__ = [
     "Settings", "diagnose", "diagnose_file", "prepare_data",
     "BeyondSpaceError", "decide", "fit_in_window", "ratio_window",
     "Fit", "FitData", "ModelCurves", "fit_intervals", "fit_model", "nested_start",
+    "with_space_error",
     "write_report",
     "bic", "misfit_test", "noise_from_differences", "noise_from_replicates",
     "VISCOELASTIC_CREEP", "diagnose_time_data", "diagnose_time_file", "write_time_report",

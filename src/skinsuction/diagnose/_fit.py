@@ -62,7 +62,7 @@ class FitData:
         return decorrelate(z * scale, a, gamma)
 
 
-def with_space_error(data: dict, x1d_mpa: float) -> dict:
+def with_space_error(data: dict, x1d_mpa: float, *, point_scale: float = 1.0) -> dict:
     """``data`` ({probe: FitData}) with the space's correlated error of each probe.
 
     The error of the scale-free space against direct FE runs is smooth along a
@@ -79,6 +79,11 @@ def with_space_error(data: dict, x1d_mpa: float) -> dict:
         ``{probe_mm: FitData}``.
     x1d_mpa : float
         The X1d at which the load of each point is read.
+    point_scale : float
+        Scales the discretisation's own share of each point's sd, as the noise's
+        was: a design's prediction fits every k-th point of a curve at sd
+        ``sigma * sqrt(k / n)`` (the same information), and its points stand for
+        ``n / k`` points each, of the discretisation's wiggles too.
 
     Returns
     -------
@@ -90,7 +95,7 @@ def with_space_error(data: dict, x1d_mpa: float) -> dict:
         # each point's sd: the noise and the discretisation's error (its wiggles along
         # the curve); the correlated term is then read in those units
         sd0 = 1e-3 * d.sigma_um
-        sd = np.hypot(sd0, discretisation_error_rms(p, d.deflection_mm)
+        sd = np.hypot(sd0, point_scale * discretisation_error_rms(p, d.deflection_mm)
                       * np.abs(d.deflection_mm))
         a, gamma = space_error_direction(p, d.pressure_mbar, d.deflection_mm, x1d_mpa, sd)
         out[p] = replace(d, space_error=(a, gamma, sd0 / sd))
