@@ -9,7 +9,8 @@
   fails until the shipped space is rebuilt and shipped again
   (``snakemake --cores 2 scale_free_space && snakemake --cores 2 ship_scale_free_space``);
 * ``skinsuction identify`` runs with no build of the workflow and names the space;
-* the ray-by-ray comparison of the workflow's ``check_shipped_space`` rule.
+* the ray-by-ray comparison of the workflow's ``check_shipped_space`` rule, and the
+  sampled one of ``check_shipped_sample`` (the study reading the shipped space).
 """
 
 import fnmatch
@@ -37,8 +38,10 @@ from skinsuction.space import (
     Cause,
     RaySpec,
     ShippedSpaceMismatch,
+    check_shipped_sample,
     check_shipped_space,
     compare_ray_spaces,
+    compute_bundle,
     compute_ray,
     default_space_dir,
     knife_edge_rays,
@@ -46,6 +49,7 @@ from skinsuction.space import (
     rays_of,
     read_ray_space,
     resolve_space,
+    sample_bundles,
     shipped_provenance,
     verify_shipped_files,
 )
@@ -318,3 +322,38 @@ def test_a_knife_edge_ray_that_moved_is_reported_not_failed(tmp_path, provenance
     change(firm[0], 1.01)
     with pytest.raises(ShippedSpaceMismatch, match=re.escape(firm[0]["ray_id"])):
         check_shipped_space(built, tmp_path / "firm.csv", spec, causes)
+
+
+def test_the_study_on_the_shipped_space_checks_a_sample_solved_afresh(tmp_path, provenance):
+    """A bundle of two cheap rays solved now with the FE code against the shipped rays:
+    equal; the same bundle with one deflection moved by 1e-6: the check fails naming
+    the ray; another configuration: refused, naming the key."""
+    spec = RaySpec(**provenance["ray_spec"])
+    causes = {name: Cause.from_dict(d) for name, d in provenance["causes"].items()}
+    shipped = read_ray_space(SHIPPED_SPACE_DIR / NEO)
+    solver, edge = shipped.metadata["rays"], knife_edge_rays(shipped)
+    # rays the default element carries to the end (a knife-edge ray that moved is only
+    # logged): most rays stop in the load tail, these few do not
+    cheap = [r["ray_id"] for r in rays_of(spec) if r["ray_id"] not in edge
+             and solver[r["ray_id"]]["seconds"] <= MAX_RAY_SECONDS][-2:]
+    bundle = tmp_path / f"{BASELINE}__sample.parquet"
+    compute_bundle(cheap, bundle, spec.pressures_mbar, spec.mesh, list(spec.fallback),
+                   fallback_below_mbar=spec.fallback_below_mbar)
+    table = check_shipped_sample([bundle], tmp_path / "ok.csv", spec, causes)
+    assert table["model"].tolist() == [BASELINE] and table["status"].tolist() == ["equal"]
+    assert table["rays_compared"].tolist() == [2]
+    moved = tmp_path / f"{BASELINE}__moved.parquet"
+    t = pq.read_table(bundle)
+    df = t.to_pandas()
+    last = int(np.flatnonzero((df["ray_id"] == cheap[1]) & (df["deflection_mm"] > 0))[-1])
+    df.loc[last, "deflection_mm"] *= 1 + 1e-6
+    pq.write_table(pa.Table.from_pandas(df, preserve_index=False)
+                   .replace_schema_metadata(t.schema.metadata), moved)
+    with pytest.raises(ShippedSpaceMismatch, match=re.escape(cheap[1])):
+        check_shipped_sample([moved], tmp_path / "bad.csv", spec, causes)
+    other = RaySpec(**{**provenance["ray_spec"], "load_steps": spec.load_steps + 1})
+    with pytest.raises(ShippedSpaceMismatch, match="ray_spec.load_steps"):
+        check_shipped_sample([bundle], tmp_path / "na.csv", other, causes)
+    # the sample is seeded, not hand-picked, and the same whatever the order
+    ids = [f"b{i}" for i in range(20)]
+    assert sample_bundles(ids, 4, 0) == sample_bundles(ids[::-1], 4, 0) != sample_bundles(ids, 4, 1)

@@ -147,6 +147,30 @@ def test_the_confusion_with_both_layers_given_draws_neither_thickness(workdir):
 def test_default_invocation_runs_the_paper_study(workdir):
     counts = job_counts(snakemake(workdir, "-n"))
     assert counts["simulate_point"] == 320
+    # it reads the shipped scale-free space, checked against a sample of its rays
+    config = yaml.safe_load((workdir / "config" / "config.yaml").read_text())
+    assert config["scale_free_space"]["source"] == "shipped"
+    assert counts["simulate_ray_bundle"] == config["scale_free_space"]["check_bundles"]
+    assert counts["check_shipped_sample"] == 1
+    assert "assemble_scale_free_space" not in counts and "check_shipped_space" not in counts
+
+
+def test_the_space_is_built_with_its_overlay_or_its_target(workdir):
+    built = job_counts(snakemake(workdir, "-n", "--configfile", "config/build_space.yaml"))
+    target = job_counts(snakemake(workdir, "-n", "scale_free_space"))
+    for counts in (built, target):
+        assert counts["simulate_ray_bundle"] == 92
+        assert counts["assemble_scale_free_space"] == 5 and counts["check_shipped_space"] == 1
+    assert "check_shipped_sample" not in built
+
+
+def test_the_shipped_space_under_another_configuration_is_refused(workdir):
+    # the shipped space holds the default's rays only: another load range must build
+    overlay = {"scale_free_space": {"load": {"max": 60000}}}
+    out = snakemake(workdir, "-n", *write_config(workdir, "other_load", overlay)[:2],
+                    check=False)
+    assert "scale_free_space.source" in out and "ray_spec.load_max" in out, out[-2000:]
+    assert "set it to build" in out
 
 
 # ------------------------------------------------- plumbing with a stand-in model

@@ -261,7 +261,7 @@ if "scale_free_space" in config:
         """The honest test curve identified on the paper grid and on the scale-free space."""
         input:
             paper=ID_SPACE,
-            scale_free=f"{SF_DIR}/{BASELINE}.parquet",
+            scale_free=SF_SPACES[0],  # the neo-Hookean model comes first
             curves=ID_CURVES,
         output:
             table=report(

@@ -151,9 +151,11 @@ from ._shipped_check import (
     SHIPPED_ATOL_MM,
     SHIPPED_RTOL,
     ShippedSpaceMismatch,
+    check_shipped_sample,
     check_shipped_space,
     compare_ray_spaces,
     knife_edge_rays,
+    sample_bundles,
     shipped_check_applies,
 )
 from ._solve import compute_point, solve_with_fallbacks, two_layer_skin
@@ -184,6 +186,7 @@ __all__ = [
     "WORKFLOW_SPACE_DIR", "SHIPPED_SPACE_DIR", "PROVENANCE_FILE", "SpaceSource",
     "default_space_dir", "resolve_space", "shipped_provenance", "verify_shipped_files",
     "shipped_check_applies", "compare_ray_spaces", "knife_edge_rays", "check_shipped_space",
+    "check_shipped_sample", "sample_bundles",
     "ShippedSpaceMismatch", "ship_space", "ship_pair_spaces", "SHIPPED_RTOL", "SHIPPED_ATOL_MM",
     # storage
     "AXES", "AXIS_PATHS", "BOTTOMS", "COLUMNS", "DEFAULTS", "METADATA_KEY", "POINT_ID_PATTERN",

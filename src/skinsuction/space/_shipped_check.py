@@ -28,7 +28,8 @@ from ._shipped import PROVENANCE_FILE, SHIPPED_SPACE_DIR, _normal, shipped_prove
 log = logging.getLogger(__name__)
 
 __all__ = ["shipped_check_applies", "compare_ray_spaces", "knife_edge_rays",
-           "check_shipped_space", "ShippedSpaceMismatch", "SHIPPED_RTOL", "SHIPPED_ATOL_MM"]
+           "check_shipped_space", "check_shipped_sample", "sample_bundles",
+           "ShippedSpaceMismatch", "SHIPPED_RTOL", "SHIPPED_ATOL_MM"]
 
 #: Tolerance of :func:`compare_ray_spaces`: |built - shipped| <= RTOL |shipped| + ATOL.
 SHIPPED_RTOL = 1e-9
@@ -118,7 +119,7 @@ def _ray_arrays(space: RaySpace) -> dict:
 
 
 def compare_ray_spaces(built: RaySpace, shipped: RaySpace, rtol: float = SHIPPED_RTOL,
-                       atol: float = SHIPPED_ATOL_MM) -> tuple:
+                       atol: float = SHIPPED_ATOL_MM, ray_ids=None) -> tuple:
     """Compare two spaces of one model ray by ray: ``(row, {ray_id: why})``.
 
     A ray agrees when both spaces hold it (same id: probe, X1h/X1d, cause
@@ -133,6 +134,8 @@ def compare_ray_spaces(built: RaySpace, shipped: RaySpace, rtol: float = SHIPPED
         Relative tolerance.
     atol : float
         Absolute tolerance (mm).
+    ray_ids : collection of str, optional
+        Compare these rays only (a sample solved afresh); default every ray.
 
     Returns
     -------
@@ -163,6 +166,9 @@ def compare_ray_spaces(built: RaySpace, shipped: RaySpace, rtol: float = SHIPPED
     loads_b, loads_s = built.spec.load_nodes, shipped.spec.load_nodes
     same_p = loads_b.shape == loads_s.shape and np.allclose(loads_b, loads_s, rtol=1e-12)
     rb, rs = _ray_arrays(built), _ray_arrays(shipped)
+    if ray_ids is not None:
+        rb = {k: v for k, v in rb.items() if k in ray_ids}
+        rs = {k: v for k, v in rs.items() if k in ray_ids}
     for rid in sorted(set(rs) - set(rb)):
         bad[rid] = "in the shipped space, not in the build"
     for rid in sorted(set(rb) - set(rs)):
@@ -315,16 +321,20 @@ _CHECK_COLUMNS = ["model", "status", "rays_compared", "rays_differing", "max_abs
 
 
 def _check_model_file(name, built_dir: Path, shipped_dir: Path, rtol, atol) -> tuple:
-    """Compare one model file of the build with the shipped one and log its differing rays.
-
-    Returns its row of the table (without the note) and ``{"model: ray_id": why}``
-    for the differing rays that are not knife-edge rays."""
+    """Compare one model file of the build with the shipped one (:func:`_compare_logged`)."""
     shipped = read_ray_space(shipped_dir / name)
     built_path = built_dir / name
     if not built_path.is_file():
         raise ShippedSpaceMismatch(f"{built_path}: not built, but shipped ({name})")
-    built = read_ray_space(built_path)
-    row, bad = compare_ray_spaces(built, shipped, rtol, atol)
+    return _compare_logged(name, read_ray_space(built_path), shipped, rtol, atol)
+
+
+def _compare_logged(name, built, shipped, rtol, atol, ray_ids=None) -> tuple:
+    """Compare a build with the shipped space of one model and log its differing rays.
+
+    Returns its row of the table (without the note) and ``{"model: ray_id": why}``
+    for the differing rays that are not knife-edge rays."""
+    row, bad = compare_ray_spaces(built, shipped, rtol, atol, ray_ids)
     ids = sorted(bad)
     edge = knife_edge_rays(built, shipped) & set(ids)
     status = "equal" if not bad else ("knife_edge_moved" if edge == set(ids) else "differs")
@@ -342,6 +352,85 @@ def _check_model_file(name, built_dir: Path, shipped_dir: Path, rtol, atol) -> t
              name, row["rays_compared"], row["rays_differing"], row["max_abs_diff_mm"],
              row["max_rel_diff"])
     return row, {f"{shipped.name}: {rid}": why for rid, why in bad.items() if rid not in edge}
+
+
+# ------------------------------------------------- the study on the shipped space
+def sample_bundles(bundles, k: int, seed: int) -> list:
+    """``k`` of the ray bundles' ids, drawn without replacement (seeded), sorted.
+
+    >>> sample_bundles(["a", "b", "c", "d"], 2, 0) == sample_bundles(["d", "c", "b", "a"], 2, 0)
+    True
+    >>> len(sample_bundles(["a", "b"], 5, 0))
+    2
+    """
+    ids = sorted(bundles)
+    rng = np.random.default_rng(seed)
+    return sorted(rng.choice(ids, size=min(int(k), len(ids)), replace=False).tolist())
+
+
+def check_shipped_sample(bundle_paths, out_csv, spec, causes: dict,
+                         shipped_dir=SHIPPED_SPACE_DIR, rtol: float = SHIPPED_RTOL,
+                         atol: float = SHIPPED_ATOL_MM) -> pd.DataFrame:
+    """The shipped space against a sample of its rays solved afresh; write a table.
+
+    A study that reads the shipped space instead of building it
+    (``scale_free_space.source: shipped``) checks it here: the rays of
+    ``bundle_paths`` (bundle files the workflow solved with the current FE code,
+    named ``<model>__...``) against the same rays of the shipped files, as
+    :func:`check_shipped_space` compares a whole build (one row per model,
+    knife-edge rays logged, not failed).
+
+    Raises
+    ------
+    ShippedSpaceMismatch
+        The configuration is not the one the shipped space was built from, its
+        files disagree with their provenance, or a sampled ray differs.
+    """
+    shipped_dir = Path(shipped_dir)
+    prov = shipped_provenance(shipped_dir)
+    applies, reason = shipped_check_applies(spec, causes, prov)
+    if not applies:
+        raise ShippedSpaceMismatch(f"the study reads the shipped space, but {reason}; build "
+                                   "it instead (scale_free_space.source: build)")
+    problems = verify_shipped_files(shipped_dir)
+    if problems:
+        raise ShippedSpaceMismatch(f"{shipped_dir}: the shipped files disagree with their "
+                                   f"{PROVENANCE_FILE}: " + "; ".join(problems))
+    by_model = {}
+    for path in map(Path, bundle_paths):
+        by_model.setdefault(path.name.split("__")[0], []).append(path)
+    rows, all_bad = [], {}
+    for model, paths in sorted(by_model.items(), key=lambda kv: (kv[0] != BASELINE, kv[0])):
+        built = _sampled_space(paths, spec, None if model == BASELINE else causes[model])
+        ids = set((built.metadata or {}).get("rays") or {})
+        row, bad = _compare_logged(f"{model}.parquet", built,
+                                   read_ray_space(shipped_dir / f"{model}.parquet"), rtol, atol,
+                                   ray_ids=ids)
+        rows.append({**row, "note": f"a sample: {len(paths)} ray bundles solved afresh"})
+        all_bad.update(bad)
+    table = pd.DataFrame(rows, columns=_CHECK_COLUMNS)
+    write_table(table, out_csv)
+    log.info("shipped space, sampled:\n%s", table.drop(columns=["note"]).to_string(index=False))
+    if all_bad:
+        where = f"{Path(bundle_paths[0]).parent} (a sample)"
+        raise ShippedSpaceMismatch(_mismatch_text(all_bad, where, shipped_dir, rtol, atol))
+    return table
+
+
+def _sampled_space(paths, spec, cause) -> RaySpace:
+    """The rays of some bundle files as a space of one model (the others NaN)."""
+    from ._ray_space import fill_rays
+
+    ids = set()
+    for path in paths:
+        ids |= set(pd.read_parquet(path, columns=["ray_id"])["ray_id"])
+    rays = [r for r in rays_of(spec, cause) if r["ray_id"] in ids]
+    coords = np.array(cause.nodes if cause is not None else [math.nan])
+    arrays = {q: np.full((len(spec.ratio_nodes), coords.size, len(spec.pressures_mbar)), np.nan)
+              for q in spec.probes_mm}
+    info = fill_rays(paths, rays, arrays, spec, cause.name if cause else BASELINE,
+                     lambda ray: 0 if cause is None else cause.nodes.index(ray["coordinate"]))
+    return RaySpace(cause, spec, coords, arrays, {"rays": info})
 
 
 def _mismatch_text(bad: dict, built_dir, shipped_dir, rtol, atol) -> str:
