@@ -249,6 +249,63 @@ def test_a_given_sd_at_the_papers_layers_brackets_the_tailed_rays_without_their_
     assert np.isnan(m[1][p / 0.3 > 100.0]).all()
 
 
+def test_a_subject_s_own_layers_take_the_untailed_loads_of_their_rays():
+    """A subject's layers (or a probe the space lacks) read rays on demand, which stop
+    where the load tail starts: the space at the measurement has the untailed loads,
+    the space's own rays (and a cause's effect carried over) cut to them.  Before, it
+    kept the tailed loads over untailed rays, and a candidate whose load fell in the
+    tail read past their end: every diagnosis of data/example_measured_layers.csv
+    stopped with an IndexError."""
+    from skinsuction.diagnose import FitData, ModelCurves
+    from skinsuction.space import Cause
+
+    spec = RaySpec([2, 6], [0.003, 0.01, 0.03, 0.1], load_max=200.0, load_steps=8, load_tail_from=100.0,
+                   load_tail_steps=4)
+    short = spec.untailed()
+
+    def rays(loads, t_d=1.0):
+        q = np.asarray(loads) / 200.0
+        return np.stack([q ** e for e in (1.0, 1.2, 1.4, 1.6)])[:, None, :] * (
+            1 + 0.5 * (t_d - 1.0))
+
+    nodes = (0.0, 1.0, 3.0, 10.0)
+
+    def with_cause(r):  # strain stiffening: up to 10 % less deflection at X2d/X1d = 10
+        return np.concatenate([r * (1 - 0.01 * c) for c in nodes], axis=1)
+
+    class Solver:  # as OnDemandRays: its rays are those of the untailed specification
+        def rays(self, p, layers, cause=None, **window):
+            r = rays(short.load_nodes, layers["dermis.thickness"])
+            return (r if cause is None else with_cause(r)), {"rays": 4, "stopped_early": 0,
+                                                             "cache": "-"}
+
+    base = RaySpace(None, spec, np.array([np.nan]),
+                    {q: rays(spec.load_nodes) for q in (2.0, 6.0)})
+    stiff = Cause("strain_stiffening", "x2d", "X2d", "MPa", True, 0.0, nodes)
+    cause = RaySpace(stiff, spec, np.array(nodes),
+                     {q: with_cause(rays(spec.load_nodes)) for q in (2.0, 6.0)})
+    p = np.linspace(5.0, 50.0, 10)
+    for probes, geometry, solve in (
+            ([6.0], Geometry(1.3, 1.0, given=("t_d",)), True),  # own layers, cause solved
+            ([6.0], Geometry(1.3, 1.0, given=("t_d",)), False),  # its effect carried over
+            ([4.0, 6.0], Geometry(), True)):  # a probe the space lacks
+        out, _ = spaces_at({BASELINE: base, "strain_stiffening": cause}, probes, geometry,
+                           Solver(), solve_causes=solve)
+        assert out["strain_stiffening"].rays(6.0).shape[1] == len(nodes)
+        for sp in out.values():
+            assert sp.spec.load_max == short.load_max
+            assert all(sp.rays(q).shape[-1] == len(short.load_nodes) for q in probes)
+        model = ModelCurves(out[BASELINE], {6.0: FitData(6.0, p, np.zeros_like(p), 0.01)})
+        # X1d = 0.3 reads loads to 167: past the untailed reach (100), NaN there
+        m = model(np.array([[0.0, -1.5], [math.log10(0.3), -1.5]]))[6.0]
+        assert np.isfinite(m[0]).all() and np.isnan(m[1][p / 0.3 > 100.0]).all()
+        c = ModelCurves(out["strain_stiffening"], {6.0: FitData(6.0, p, np.zeros_like(p), 0.01)})
+        assert np.isfinite(c(np.array([[0.0, -1.5, 0.5]]))[6.0]).all()
+    # every probe the space's own at 1 mm: the tail stays
+    out, _ = spaces_at({BASELINE: base}, [2.0, 6.0], Geometry(), Solver())
+    assert out[BASELINE].spec.load_max == spec.load_max
+
+
 def _pre_tension_at_given_dermis():
     """Toy pre-tension rays whose thickness effect shrinks and turns with the
     pre-stretch, solved at a dermis of 1.3 +- 0.1 mm: (cause, nodes, layered(t_d, c),

@@ -241,7 +241,7 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
                             f"({getattr(geometry, cause.keyword):g} mm)")
         elif at.default and all(space.has_probe(p) for p in at.probes):
             out[name] = RaySpace(cause, at.spec, space.coordinates,
-                                 {p: space.rays(p) for p in at.probes}, space.metadata)
+                                 {p: at.cut(space.rays(p)) for p in at.probes}, space.metadata)
         elif on_demand is not None and solve_causes:
             out[name] = _solved_cause(name, space, at, ratio_window)
             own_brackets.add(name)
@@ -270,7 +270,18 @@ class _Measurement:
 
     def __post_init__(self):
         self.layers = _rounded_layers(self.geometry, self.notes)
-        self.spec = replace(self.base.spec, probes_mm=tuple(self.probes))
+        # rays on demand and the geometry spaces stop where the load tail starts: a
+        # measurement with any of them takes the untailed loads (a prefix of the tailed
+        # ones), the space's own rays cut to them; the tail only where every probe's
+        # rays are the space's own
+        own = self.default and all(self.base.has_probe(p) for p in self.probes)
+        spec = self.base.spec if own else self.base.spec.untailed()
+        self.spec = replace(spec, probes_mm=tuple(self.probes))
+        self.n_loads = len(self.spec.pressures_mbar)
+
+    def cut(self, rays: np.ndarray) -> np.ndarray:
+        """The space's own rays (…, n_p) cut to this measurement's loads."""
+        return rays[..., :self.n_loads]
 
     @property
     def default(self) -> bool:
@@ -300,7 +311,7 @@ def _neo_hookean_rays(at: _Measurement) -> dict:
     base, rays, solved = at.base, {}, []
     for p in at.probes:
         if at.default and base.has_probe(p):
-            rays[p] = base.rays(p)
+            rays[p] = at.cut(base.rays(p))
             continue
         if at.on_demand is None:
             raise GeometryOutsideSpace(
@@ -338,7 +349,7 @@ def _solved_cause(name: str, space: RaySpace, at: _Measurement, ratio_window) ->
                          "rays_solved": 0}
     for p in at.probes:
         if at.default and space.has_probe(p):
-            arrays[p] = space.rays(p)[keep]
+            arrays[p] = at.cut(space.rays(p)[keep])
             continue
         arrays[p], info = at.on_demand.rays(p, at.layers, space.cause, **_subset(nodes, full))
         for k in total:
@@ -363,7 +374,8 @@ def _carried_cause(name: str, space: RaySpace, at: _Measurement, rays: dict):
         if effect is None:
             break
         with np.errstate(divide="ignore", invalid="ignore"):
-            g = np.log(np.where(rays[p][..., 1:] > 0, rays[p][..., 1:], np.nan)) + effect
+            g = (np.log(np.where(rays[p][..., 1:] > 0, rays[p][..., 1:], np.nan))
+                 + effect[..., :rays[p].shape[-1] - 1])  # the cause's loads, cut to the rays'
         full = np.zeros(g.shape[:-1] + (g.shape[-1] + 1,))
         full[..., 1:] = np.exp(g)
         arrays[p] = full
