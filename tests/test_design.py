@@ -48,6 +48,21 @@ def _diagnosis_fit(space, fd):
     return f, fit_intervals(space, fd, f.theta).parameters
 
 
+def _noisy_half_widths(space, clean, p, sigma, n, seed) -> dict:
+    """Relative 95 % half-widths of X1d and X1h of ``n`` noisy measurements of the
+    ``clean`` curves (2 µm noise, read at 0.01 mm), each fitted as the diagnosis fits."""
+    rng = np.random.default_rng(seed)
+    widths = {"X1d": [], "X1h": []}
+    for _ in range(n):
+        fd = {q: FitData(q, p, np.round(c[0] + rng.normal(0, 2e-3, p.size), 2), sigma)
+              for q, c in clean.items()}
+        f, iv = _diagnosis_fit(space, fd)
+        for k in widths:
+            est = f.parameters[k]
+            widths[k].append(max(iv[k].upper / est - 1, 1 - iv[k].lower / est))
+    return widths
+
+
 def test_predicted_intervals_are_those_noisy_measurements_get(spaces):
     """The prediction (profile likelihood on the noise-free curves) against 40 noisy
     measurements of the same skin: Gaussian noise and the 0.01 mm rounding, each fitted
@@ -100,15 +115,7 @@ def test_at_high_domes_the_prediction_weighs_the_spaces_error_as_the_diagnosis_d
     theta = np.array([math.log10(skin["x1d_mpa"]), math.log10(skin["x1h_ratio"])])
     clean = ModelCurves(base, blank)(theta[None])
     assert clean[8.0][0][-1] > 0.3 * 4.0  # the dome's height over the radius
-    rng = np.random.default_rng(3)
-    widths = {"X1d": [], "X1h": []}
-    for _ in range(16):
-        fd = {q: FitData(q, p, np.round(clean[q][0] + rng.normal(0, 2e-3, p.size), 2), sigma)
-              for q in design.probes_mm}
-        f, iv = _diagnosis_fit(base, fd)
-        for k in widths:
-            est = f.parameters[k]
-            widths[k].append(max(iv[k].upper / est - 1, 1 - iv[k].lower / est))
+    widths = _noisy_half_widths(base, clean, p, sigma, 16, seed=3)
     for k in widths:
         ratio = np.median(widths[k]) / pred[f"{k}_halfwidth"]
         assert 0.85 < ratio < 1.15, (k, ratio)
@@ -165,7 +172,10 @@ def test_causes_detectability_and_the_ceiling_between_mimics(spaces):
     assert min(low["strain_stiffening_vs_pre_tension_gap"],
                low["strain_stiffening_vs_hypodermis_thickness_gap"]) > 10.0
     high = predict_skin(skin, Design((2.0, 6.0), 300.0), spaces, Settings(), causes=causes)
-    assert high["hypodermis_thickness_vs_pre_tension_gap"] > 100.0
+    # a gap of 65 with the discretisation's error weighed at the high domes (1 841
+    # without it): a ceiling above 0.999 either way
+    assert high["hypodermis_thickness_vs_pre_tension_gap"] > 25.0
+    assert attribution_ceiling(high["hypodermis_thickness_vs_pre_tension_gap"]) > 0.99
     # more suction, narrower intervals
     assert high["X1d_halfwidth"] < low["X1d_halfwidth"]
     assert high["hypodermis_thickness_halfwidth"] < low["hypodermis_thickness_halfwidth"]
@@ -240,15 +250,7 @@ def test_a_given_thickness_s_sd_is_predicted_as_noisy_fits_see_it(spaces):
     assert model.d == 3  # X1d, X1h/X1d and the dermis's offset in sd units
     theta = np.array([math.log10(skin["x1d_mpa"]), math.log10(skin["x1h_ratio"]), 0.0])
     clean = model(theta[None])
-    rng = np.random.default_rng(11)
-    widths = {"X1d": [], "X1h": []}
-    for _ in range(20):
-        fd = {q: FitData(q, p, np.round(clean[q][0] + rng.normal(0, 2e-3, p.size), 2), sigma)
-              for q in design.probes_mm}
-        f, iv = _diagnosis_fit(base, fd)
-        for k in widths:
-            est = f.parameters[k]
-            widths[k].append(max(iv[k].upper / est - 1, 1 - iv[k].lower / est))
+    widths = _noisy_half_widths(base, clean, p, sigma, 20, seed=11)
     for k in widths:
         ratio = np.median(widths[k]) / pred[f"{k}_halfwidth"]
         assert 0.8 < ratio < 1.25, (k, ratio)
