@@ -256,6 +256,35 @@ def test_a_stopped_ray_is_avoided_by_shifting_the_stencil():
     assert np.isnan(RayInterpolant(stopped, 6.0, p)(on_node)[0, 11:]).all()
 
 
+def test_rays_combined_to_the_last_load_read_are_the_full_rays_cut_there():
+    s = toy_spaces()["strain_stiffening"]
+    rays = {q: a.copy() for q, a in s.deflection_mm.items()}
+    rays[6.0][:, 0, 12:] = np.nan  # stopped rays send candidates to the shifted stencils
+    s = RaySpace(s.cause, s.spec, s.coordinates, rays, {})
+    rng = np.random.default_rng(5)
+    p = np.arange(0.0, 101.0, 2.0)
+    f = RayInterpolant(s, 6.0, p)
+    n = 500
+    theta = np.column_stack([rng.uniform(f.lower[0], f.upper[0], n),
+                             rng.uniform(f.lower[1], f.upper[1], n),
+                             rng.uniform(f.lower[2], f.upper[2], n)])
+    full = f.combined_rays(theta)
+    for loads in (2, 7, 13, full.shape[1]):
+        np.testing.assert_array_equal(f.combined_rays(theta, loads=loads), full[:, :loads])
+    # the measured curves read off the cut rays are those read off the full ones, bit
+    # for bit, for a wide batch and for a focused stiff one (which reads few loads)
+    cut = RayInterpolant.combined_rays
+    for batch in (theta, theta[theta[:, 0] > f.upper[0] - 0.2]):
+        got = f(batch)
+        try:
+            RayInterpolant.combined_rays = lambda self, t, loads=None: cut(self, t)
+            want = f(batch)
+        finally:
+            RayInterpolant.combined_rays = cut
+        np.testing.assert_array_equal(got, want)
+        assert np.isfinite(got).sum() > 0.5 * got.size
+
+
 def test_ray_space_round_trips_through_parquet(tmp_path):
     s = toy_spaces()["pre_tension"]
     s.metadata = {"ray_spec": s.spec.to_dict(), "cause": s.cause.to_dict()}

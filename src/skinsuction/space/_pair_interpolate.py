@@ -41,7 +41,7 @@ class PairRayInterpolant(RayInterpolant):
     def upper(self) -> np.ndarray:
         return np.append(self._slices[0].upper, self.space.second.axis_nodes[-1])
 
-    def combined_rays(self, theta) -> np.ndarray:
+    def combined_rays(self, theta, loads=None) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
         n = theta.shape[0]
         start, w = self._axis_2.weights(theta[:, 3])
@@ -50,10 +50,11 @@ class PairRayInterpolant(RayInterpolant):
         # only the slices a stencil can reach (a search narrows to a few of them)
         inside = start[~outside] if (~outside).any() else start[:1]
         lo, hi = max(0, int(inside.min()) - 2), min(len(self._slices), int(inside.max()) + m + 2)
-        logs = np.full((len(self._slices), n, self._g.shape[-1]), np.nan)
+        width = self._g.shape[-1] if loads is None else loads - 1
+        logs = np.full((len(self._slices), n, width), np.nan)
         with np.errstate(divide="ignore", invalid="ignore"):
             for j in range(lo, hi):
-                logs[j] = np.log(self._slices[j].combined_rays(theta[:, :3])[:, 1:])
+                logs[j] = np.log(self._slices[j].combined_rays(theta[:, :3], loads)[:, 1:])
         g = _combine_rows(logs, start, w, np.arange(n), m)
         bad = np.flatnonzero(np.isnan(g).any(axis=1) & ~outside)
         if bad.size:

@@ -103,10 +103,11 @@ class RayInterpolant:
             hi.append(float(self.space.cause.axis_nodes[-1]))
         return np.array(hi)
 
-    def _combine(self, theta, start_r, start_c=None, wr=None, wc=None):
-        """log M of the candidates' rays with the given stencil starts, (N, n_p - 1).
+    def _combine(self, theta, start_r, start_c=None, wr=None, wc=None, loads=None):
+        """log M of the candidates' rays with the given stencil starts, (N, loads - 1).
 
-        ``wr``, ``wc``: the weights of these starts, if already known."""
+        ``wr``, ``wc``: the weights of these starts, if already known; ``loads``: the
+        first loads of the rays only (all by default)."""
         if wr is None:
             wr = self._axis_r.weights_at(theta[:, 1], start_r)
         rows = start_r[:, None] + np.arange(self._axis_r.m)  # rows of the (r, c) table
@@ -120,7 +121,8 @@ class RayInterpolant:
             w = (wr[:, :, None] * wc[:, None, :]).reshape(len(theta), -1)
         else:
             rows = rows * self._g.shape[1]
-        stencil = np.take(self._flat_g, rows, axis=0)  # (N, stencil, n_p - 1)
+        flat_g = self._flat_g if loads is None else self._flat_g[:, :loads - 1]
+        stencil = np.take(flat_g, rows, axis=0)  # (N, stencil, loads - 1)
         out = np.einsum("nk,nkp->np", w, stencil)
         # a ray with weight exactly 0 (the candidate sits on a node) is ignored, so a
         # neighbouring ray that stopped early does not spoil a node (NaN * 0 = NaN)
@@ -131,7 +133,7 @@ class RayInterpolant:
             out[redo] = np.einsum("nk,nkp->np", w[redo], zeroed)
         return out
 
-    def combined_rays(self, theta) -> np.ndarray:
+    def combined_rays(self, theta, loads=None) -> np.ndarray:
         """The rays at (r, c) of the candidates, on the rays' own pressures.
 
         NaN policy "shift" (as the identification's): where the centred stencil
@@ -142,10 +144,14 @@ class RayInterpolant:
         ----------
         theta : array_like, shape (N, d)
             Candidates ``(log10 X1d, log10 r[, u])`` (X1d is not used here).
+        loads : int, optional
+            Only the first ``loads`` pressures of the FE runs (a search whose
+            candidates read the rays no further pays for no more): the same values
+            there as with every load.
 
         Returns
         -------
-        ndarray, shape (N, n_p)
+        ndarray, shape (N, n_p) or (N, loads)
             Deflections (mm) at the pressures of the FE runs (``spec.pressures_mbar``),
             0 at p = 0; NaN outside the rays or beyond their reach.
         """
@@ -157,7 +163,7 @@ class RayInterpolant:
         if self.d == 3:
             sc, wc = self._axis_c.weights(theta[:, 2])
             outside |= np.isnan(wc[:, 0])
-        g = self._combine(theta, sr, sc, wr, wc)
+        g = self._combine(theta, sr, sc, wr, wc, loads)
         g[outside] = np.nan  # no extrapolation
         bad = np.flatnonzero(np.isnan(g).any(axis=1) & ~outside)
         if bad.size:
@@ -175,7 +181,7 @@ class RayInterpolant:
                     hole = np.isnan(sub)
                     if not hole.any():
                         break
-                    alt = self._combine(th, ra, cb)
+                    alt = self._combine(th, ra, cb, loads=loads)
                     sub = np.where(hole, alt, sub)
             g[bad] = sub
         out = np.empty((n, g.shape[1] + 1))
@@ -202,13 +208,16 @@ class RayInterpolant:
         if theta.shape[1] != self.d:
             raise ValueError(f"candidates must have {self.d} columns, got {theta.shape}")
         n, u = theta.shape[0], self.pressure_mbar.size
-        rays = self.combined_rays(theta)  # (N, n_p)
         x1d = 10.0 ** theta[:, 0]
         # the scaling law: the candidate at p reads its ray at load p / X1d, i.e. at the
         # pressure p X1d_ref / X1d of the FE run; beyond the ray's reach: NaN
         q = reference_pressure(self.pressure_mbar[None, :], x1d[:, None], self.x1d_ref)  # (N, u)
         start, w = self._axis_p.weights(q.reshape(-1))
         m = self._axis_p.m
+        # the rays are combined up to the last load a stencil reads (a focused window
+        # of stiff candidates reads a fraction of them); the shifted stencils below
+        # only move back
+        rays = self.combined_rays(theta, loads=int(start.max()) + m if start.size else None)
         # the stencil of (candidate, pressure) in the flat rays, gathered one node
         # at a time: four 1-D gathers are faster than one (N u, m) gather
         flat = rays.reshape(-1)
