@@ -16,7 +16,9 @@ percentiles of the relative error overall and per aperture band. Asserts nothing
 The rays of a geometry are read off the geometry space (the default,
 skinsuction.space.GeometrySpace) where it holds them; --no-geometry-space solves
 them all. --side-by-side does both in one run, against the same direct FE runs,
-and prints both tables with the CPU a geometry's rays cost each way.
+and prints both tables with the CPU a geometry's rays cost each way. The rays read
+are also read along the load with the first load axis (cubic Lagrange of M in q,
+benchmarks/_load_before.py), against the same FE runs.
 """
 
 from __future__ import annotations
@@ -51,6 +53,8 @@ def _run(job):
     from skinsuction.evaluation import AccuracyPoint, compare_point
     from skinsuction.space import BASELINE, Geometry, spaces_at
 
+    from _load_before import read_m_in_q
+
     (probe, t_d, t_h), points = job
     t0 = time.process_time()
     g = Geometry(t_d, t_h, given=("t_d", "t_h"))
@@ -72,6 +76,7 @@ def _run(job):
     for (x1d, ratio, p_max, p_step) in points:
         pt = AccuracyPoint(BASELINE, probe, x1d, ratio, math.nan, p_max, p_step, t_d, t_h)
         rec = compare_point(spaces[BASELINE], pt)
+        rec["before_mm"] = read_m_in_q(spaces[BASELINE], pt, rec["pressure_mbar"])
         if raw is not None:
             rec["raw_mm"] = _read_at(raw, pt, rec["pressure_mbar"])
         rec["rays_cpu_s"] = rays_cpu
@@ -141,15 +146,15 @@ def main(argv=None):
     for r in records:
         solved = r.get("solved_mm") or [math.nan] * len(r["fe_mm"])
         raw = r.get("raw_mm") or [math.nan] * len(r["fe_mm"])
-        for p, fe, sp, so, ra in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"], solved,
-                                     raw):
+        for p, fe, sp, so, ra, be in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"], solved,
+                                         raw, r["before_mm"]):
             rows.append({k: r[k] for k in ("probe_mm", "t_d", "t_h", "x1d", "ratio", "p_max",
                                            "rays_source", "rays_solved_of_16")}
                         | {"pressure_mbar": p, "fe_mm": fe, "space_mm": sp, "solved_mm": so,
-                           "raw_mm": ra})
+                           "raw_mm": ra, "before_mm": be})
     per_p = pd.DataFrame(rows)
     per_p["relative_error"] = (per_p["space_mm"] - per_p["fe_mm"]).abs() / per_p["fe_mm"].abs()
-    for k in ("solved", "raw"):
+    for k in ("solved", "raw", "before"):
         per_p[f"{k}_relative_error"] = ((per_p[f"{k}_mm"] - per_p["fe_mm"]).abs()
                                         / per_p["fe_mm"].abs())
     out = Path(args.out)
@@ -178,7 +183,8 @@ def main(argv=None):
         return (f"median {100 * np.median(v):.3f} %, 95th percentile "
                 f"{100 * np.percentile(v, 95):.3f} %, max {100 * v.max():.3f} %")
 
-    columns = [("relative_error", "rays read"), ("raw_relative_error", "grid alone")]
+    columns = [("relative_error", "rays read"), ("raw_relative_error", "grid alone"),
+               ("before_relative_error", "rays read, the first load axis (M in q)")]
     if args.side_by_side:
         columns.append(("solved_relative_error", "rays solved"))
     bands = pd.cut(per_p["probe_mm"], [2, 3, 5, 7, 8.0001], right=False,

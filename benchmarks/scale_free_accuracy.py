@@ -14,7 +14,8 @@ Prints the median, 95th percentile and maximum of the relative error, of the
 absolute error and of the normalised error |dM| / max(0.2 % M, 0.3 µm) (the
 target is met where it is <= 1), per model and overall, and where the maximum is.
 Also per load band q = p / X1d (the even steps, and the tail beyond 20 000
-mbar/MPa where the space has one). ``--x1d-range 0.007 0.03 --protocol 500 10``
+mbar/MPa where the space has one), and side by side with the first load axis
+(cubic Lagrange of M in q, benchmarks/_load_before.py) on the same FE runs. ``--x1d-range 0.007 0.03 --protocol 500 10``
 measures the tail: 500 mbar on soft forearm skin. Asserts nothing.
 """
 
@@ -43,7 +44,11 @@ def _init(space_dir):
 def _run(point):
     from skinsuction.evaluation import compare_point
 
-    return compare_point(_SPACES[point.model], point)
+    from _load_before import read_m_in_q
+
+    rec = compare_point(_SPACES[point.model], point)
+    rec["before_mm"] = read_m_in_q(_SPACES[point.model], point, rec["pressure_mbar"])
+    return rec
 
 
 def _stats(values):
@@ -95,14 +100,17 @@ def main(argv=None):
 
     rows = []
     for r in records:
-        for p, fe, sp in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"]):
+        for p, fe, sp, be in zip(r["pressure_mbar"], r["fe_mm"], r["space_mm"],
+                                 r["before_mm"]):
             rows.append({k: r[k] for k in ("model", "probe_mm", "x1d", "ratio", "coordinate",
                                            "p_max")} | {"pressure_mbar": p, "fe_mm": fe,
-                                                        "space_mm": sp})
+                                                        "space_mm": sp, "before_mm": be})
     per_p = pd.DataFrame(rows)
     per_p["abs_error_um"] = 1e3 * (per_p["space_mm"] - per_p["fe_mm"]).abs()
     per_p["relative_error"] = per_p["abs_error_um"] / (1e3 * per_p["fe_mm"].abs())
     per_p["normalised_error"] = normalised_error(per_p["fe_mm"], per_p["space_mm"])
+    per_p["before_relative_error"] = ((per_p["before_mm"] - per_p["fe_mm"]).abs()
+                                      / per_p["fe_mm"].abs())
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     per_p.to_csv(out, index=False)
@@ -121,6 +129,10 @@ def main(argv=None):
     for label, g in [("all", per_p), *per_p.groupby("model")]:
         print(f"[{label}] {len(g)} pressures")
         print(f"  relative error: {_stats(g['relative_error'])}")
+        both = g["before_relative_error"].notna()
+        print(f"  side by side at the {int(both.sum())} pressures both load axes read: "
+              f"log M in log q {_stats(g.loc[both, 'relative_error'])}; the first, M in q, "
+              f"{_stats(g.loc[both, 'before_relative_error'])}")
         print(f"  absolute error (µm): {_stats(g['abs_error_um'])}")
         print(f"  normalised error |dM| / max(0.2 % M, 0.3 µm): "
               f"{_stats(g['normalised_error'])}; "

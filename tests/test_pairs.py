@@ -43,11 +43,12 @@ def _pair():
 
 
 def _field(probe, log_r, u1, u2, q):
-    """M exactly representable: log M cubic in (log r, u1, u2), M cubic in q (M(0) = 0)."""
+    """M exactly representable: log M cubic in (log r, u1, u2), M proportional to q (so
+    log M linear in log q above the first load, M linear in q below it, M(0) = 0)."""
     g = (0.3 * log_r - 0.05 * log_r ** 2 + 0.01 * log_r ** 3 - 0.4 * u1 + 0.07 * u1 ** 2
          - 0.8 * u2 + 0.5 * u2 * u1 + 0.02 * u2 ** 3 + 0.1 * probe)
     s = q / 20000.0
-    return np.exp(g) * (s + 0.3 * s ** 2 - 0.1 * s ** 3)
+    return np.exp(g) * s
 
 
 def _rays(cause1, nodes1, cause2, nodes2, probe):

@@ -10,8 +10,8 @@ model) gives the deflection of a time curve as ``M_el(p_eff(t))``
   one and two terms), updated exactly over each linear piece of the suction
   (:func:`effective_pressures`);
 * ``M_el`` at ``(X1d, X1h)`` from the space's neo-Hookean rays: the ray at
-  ``r = X1h/X1d`` (:meth:`skinsuction.space.RayInterpolant.combined_rays`) read by
-  cubic Lagrange at the load ``p_eff X1d_ref / X1d`` (the scaling law), exactly
+  ``r = X1h/X1d`` (:meth:`skinsuction.space.RayInterpolant.combined_logs`) read
+  along its load (:class:`skinsuction.space.LoadAxis`) at ``p_eff X1d_ref / X1d`` (the scaling law), exactly
   as :class:`~skinsuction.space.RayInterpolant` reads fixed pressures: each
   candidate has its own p_eff, so the rays are read at it directly.
 
@@ -38,7 +38,7 @@ import math
 
 import numpy as np
 
-from skinsuction.space import LagrangeAxis, RayInterpolant, reference_pressure
+from skinsuction.space import LoadAxis, RayInterpolant, reference_pressure
 
 __all__ = ["G_BOUNDS", "TAU_BOUNDS_S", "retardation", "effective_pressures", "clean_pressure",
            "ElasticRays", "theta_names"]
@@ -229,7 +229,7 @@ class ElasticRays:
         self._interp = RayInterpolant(space, probe_mm, [0.0, float(p_max_mbar)])
         self.lower, self.upper = self._interp.lower, self._interp.upper
         self.x1d_ref = float(space.spec.x1d_ref)
-        self._axis = LagrangeAxis(np.asarray(space.spec.pressures_mbar, dtype=float))
+        self._load = LoadAxis(space.spec.pressures_mbar)
         self.load_max = float(space.spec.load_max)
         self.cause = space.cause
 
@@ -238,22 +238,12 @@ class ElasticRays:
         the cause's axis coordinate of a cause's space) at ``pressure (N, T)``; NaN
         where a ray stopped before that load (or outside the space)."""
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
-        rays = self._interp.combined_rays(theta)  # (N, n_p), the space's NaN policy
-        n, T = pressure_mbar.shape
         q = reference_pressure(np.maximum(pressure_mbar, 0.0), (10.0 ** theta[:, 0])[:, None],
                                self.x1d_ref)
-        start, w = self._axis.weights(q.reshape(-1))
-        flat = rays.reshape(-1)
-        first = np.repeat(np.arange(n) * rays.shape[1], T) + start
-        vals = w[:, 0] * flat.take(first)
-        for k in range(1, w.shape[1]):
-            vals += w[:, k] * flat.take(first + k)
-        # a node of weight exactly 0 is ignored (a ray that stopped just there)
-        redo = np.flatnonzero(np.isnan(vals) & ~np.isnan(w[:, 0]))
-        if redo.size:
-            nodes = flat.take(first[redo, None] + np.arange(w.shape[1]))
-            vals[redo] = np.where(w[redo] == 0.0, 0.0, w[redo] * nodes).sum(axis=1)
-        return vals.reshape(n, T)
+        weights = self._load.weights(q)
+        # the space's NaN policy across rays, its interpolant along the load
+        return self._load.read(self._interp.combined_logs(theta, loads=weights["loads"]),
+                               weights)
 
 
 def prony_of(theta, start: int = 2) -> tuple:

@@ -85,6 +85,7 @@ from ._grid import (
 )
 from ._interpolate import GriddedSpace, SpaceInterpolant, evaluate, interpolate_pressure
 from ._lagrange import LagrangeAxis
+from ._load_axis import LoadAxis
 from ._coordinates import SpaceCoordinates, load, reference_pressure, similar_length
 from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
 from ._open import LoadedSpace, ProbeSpace, load_space
@@ -199,7 +200,7 @@ __all__ = [
     "SimulatedSpace", "SLICE_PATHS", "assemble_space", "convergence_summary", "expand_axis", "grid_points",
     "read_space", "GriddedSpace",
     # interpolation
-    "LagrangeAxis", "SpaceInterpolant", "evaluate", "interpolate_pressure",
+    "LagrangeAxis", "LoadAxis", "SpaceInterpolant", "evaluate", "interpolate_pressure",
     # the scale-free layout
     "BASELINE", "DEFAULT_CAUSES", "NONE", "SCALES", "Cause", "default_registry",
     "registry_from_config", "BUNDLE_ID_PATTERN", "EXTRA_KEYWORDS", "RAY_ID_PATTERN",

@@ -41,7 +41,7 @@ class PairRayInterpolant(RayInterpolant):
     def upper(self) -> np.ndarray:
         return np.append(self._slices[0].upper, self.space.second.axis_nodes[-1])
 
-    def combined_rays(self, theta, loads=None) -> np.ndarray:
+    def combined_logs(self, theta, loads=None) -> np.ndarray:
         theta = np.asarray(theta, dtype=float)
         n = theta.shape[0]
         start, w = self._axis_2.weights(theta[:, 3])
@@ -52,9 +52,8 @@ class PairRayInterpolant(RayInterpolant):
         lo, hi = max(0, int(inside.min()) - 2), min(len(self._slices), int(inside.max()) + m + 2)
         width = self._g.shape[-1] if loads is None else loads - 1
         logs = np.full((len(self._slices), n, width), np.nan)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            for j in range(lo, hi):
-                logs[j] = np.log(self._slices[j].combined_rays(theta[:, :3], loads)[:, 1:])
+        for j in range(lo, hi):
+            logs[j] = self._slices[j].combined_logs(theta[:, :3], loads)
         g = _combine_rows(logs, start, w, np.arange(n), m)
         bad = np.flatnonzero(np.isnan(g).any(axis=1) & ~outside)
         if bad.size:
@@ -68,10 +67,7 @@ class PairRayInterpolant(RayInterpolant):
                 sub = np.where(hole, _combine_rows(logs, alt, wa, bad, m), sub)
             g[bad] = sub
         g[outside] = np.nan
-        out = np.empty((n, g.shape[1] + 1))
-        out[:, 0] = 0.0
-        np.exp(g, out=out[:, 1:])
-        return out
+        return g
 
 
 def _combine_rows(logs, start, w, rows, m):

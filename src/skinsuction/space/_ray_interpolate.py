@@ -1,8 +1,9 @@
 """The scale-free space off its rays: cubic interpolation across rays and along the load.
 
 Across rays, cubic Lagrange in ``log10 r`` (r = X1h/X1d) and in the cause's
-axis coordinate, on ``log M``; along the load of a ray, cubic Lagrange on M at
-``q = p / X1d`` (:class:`RayInterpolant`).  :class:`NeoHookeanSlice` is the
+axis coordinate, on ``log M``; along the load of a ray, cubic Lagrange on log M
+in log q, ``q = p / X1d`` (:class:`skinsuction.space._load_axis.LoadAxis`;
+:class:`RayInterpolant`).  :class:`NeoHookeanSlice` is the
 neo-Hookean space of one probe in the shape the identification asks of every
 layout (:class:`skinsuction.space.ProbeSpace`), tabulated once per pressure
 protocol (:class:`TabulatedInterpolant`).
@@ -17,6 +18,7 @@ import numpy as np
 from ._coordinates import reference_pressure
 from ._interpolate import GriddedSpace, SpaceInterpolant
 from ._lagrange import LagrangeAxis
+from ._load_axis import LoadAxis
 from ._ray_space import RaySpace
 
 __all__ = ["RayInterpolant", "NeoHookeanSlice", "TabulatedInterpolant"]
@@ -82,7 +84,7 @@ class RayInterpolant:
         self._axis_r = LagrangeAxis(np.log10(spec.ratio_nodes))
         self._axis_c = (LagrangeAxis(space.cause.axis_nodes) if space.cause is not None
                         else None)
-        self._axis_p = LagrangeAxis(np.asarray(spec.pressures_mbar))
+        self._load = LoadAxis(spec.pressures_mbar)
         self.d = 2 if space.cause is None else 3
 
     @property
@@ -134,7 +136,16 @@ class RayInterpolant:
         return out
 
     def combined_rays(self, theta, loads=None) -> np.ndarray:
-        """The rays at (r, c) of the candidates, on the rays' own pressures.
+        """The rays at (r, c) of the candidates, on the rays' own pressures: M, 0 at p = 0
+        (:meth:`combined_logs`, exponentiated), shape (N, n_p) or (N, loads)."""
+        g = self.combined_logs(theta, loads)
+        out = np.empty((g.shape[0], g.shape[1] + 1))
+        out[:, 0] = 0.0
+        np.exp(g, out=out[:, 1:])
+        return out
+
+    def combined_logs(self, theta, loads=None) -> np.ndarray:
+        """log M of the rays at (r, c) of the candidates, at the rays' loads > 0.
 
         NaN policy "shift" (as the identification's): where the centred stencil
         holds a ray that stopped early, the other stencils that still contain the
@@ -151,12 +162,11 @@ class RayInterpolant:
 
         Returns
         -------
-        ndarray, shape (N, n_p) or (N, loads)
-            Deflections (mm) at the pressures of the FE runs (``spec.pressures_mbar``),
-            0 at p = 0; NaN outside the rays or beyond their reach.
+        ndarray, shape (N, n_p - 1) or (N, loads - 1)
+            log M (mm) at the pressures of the FE runs (``spec.pressures_mbar``) but
+            0; NaN outside the rays or beyond their reach.
         """
         theta = np.asarray(theta, dtype=float)
-        n = theta.shape[0]
         sr, wr = self._axis_r.weights(theta[:, 1])
         outside = np.isnan(wr[:, 0])
         sc = wc = None
@@ -184,10 +194,7 @@ class RayInterpolant:
                     alt = self._combine(th, ra, cb, loads=loads)
                     sub = np.where(hole, alt, sub)
             g[bad] = sub
-        out = np.empty((n, g.shape[1] + 1))
-        out[:, 0] = 0.0
-        np.exp(g, out=out[:, 1:])
-        return out
+        return g
 
     def __call__(self, theta, out=None) -> np.ndarray:
         """The deflections of candidates at the measured pressures.
@@ -212,44 +219,10 @@ class RayInterpolant:
         # the scaling law: the candidate at p reads its ray at load p / X1d, i.e. at the
         # pressure p X1d_ref / X1d of the FE run; beyond the ray's reach: NaN
         q = reference_pressure(self.pressure_mbar[None, :], x1d[:, None], self.x1d_ref)  # (N, u)
-        start, w = self._axis_p.weights(q.reshape(-1))
-        m = self._axis_p.m
+        weights = self._load.weights(q)
         # the rays are combined up to the last load a stencil reads (a focused window
-        # of stiff candidates reads a fraction of them); the shifted stencils below
-        # only move back
-        rays = self.combined_rays(theta, loads=int(start.max()) + m if start.size else None)
-        # the stencil of (candidate, pressure) in the flat rays, gathered one node
-        # at a time: four 1-D gathers are faster than one (N u, m) gather
-        flat = rays.reshape(-1)
-        row0 = np.repeat(np.arange(n) * rays.shape[1], u)
-        first = row0 + start
-        w_by_node = w.T
-        vals = w_by_node[0] * flat.take(first)
-        for k in range(1, m):
-            vals += w_by_node[k] * flat.take(first + k)
-        # a node with weight exactly 0 is ignored (NaN * 0 = NaN), as across rays
-        redo = np.flatnonzero(np.isnan(vals))
-        redo = redo[(w[redo] == 0.0).any(axis=1)]
-        if redo.size:
-            nodes = flat.take(first[redo, None] + np.arange(m))
-            vals[redo] = np.where(w[redo] == 0.0, 0.0, w[redo] * nodes).sum(axis=1)
-        # next to where a ray stopped, the centred stencil reaches past its last load:
-        # shift it back while it still holds the candidate's cell
-        hole = np.flatnonzero(np.isnan(vals) & ~np.isnan(w[:, 0]))
-        if hole.size:
-            qh = q.reshape(-1)[hole]
-            cell = np.searchsorted(self._axis_p.nodes, qh, side="right") - 1
-            for shift in (1, 2):
-                s = start[hole] - shift
-                ok = (s >= 0) & (s + m - 2 >= cell)
-                if not ok.any():
-                    break
-                ws = self._axis_p.weights_at(qh[ok], s[ok])
-                ids = s[ok, None] + np.arange(m)
-                alt = np.where(ws == 0.0, 0.0, ws * flat.take(row0[hole[ok], None] + ids)).sum(axis=1)
-                fill = hole[ok]
-                vals[fill] = np.where(np.isnan(vals[fill]), alt, vals[fill])
-        vals = vals.reshape(n, u)
+        # of stiff candidates reads a fraction of them)
+        vals = self._load.read(self.combined_logs(theta, loads=weights["loads"]), weights)
         if out is None:
             return vals
         out[...] = vals

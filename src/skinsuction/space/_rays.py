@@ -26,7 +26,8 @@ back are :mod:`._ray_space`'s; solved, :mod:`._ray_solve`'s; interpolated,
   coordinate (:meth:`Cause.to_axis`), applied to ``log M`` (the deflection
   varies by decades over r; its logarithm is close to a smooth sigmoid in
   log r), at the ray loads;
-* then along the load of the ray, cubic Lagrange on M at ``q``.
+* then along the load of the ray, cubic Lagrange on log M in log ``q``
+  (:class:`skinsuction.space.LoadAxis`; on M in q below the first load > 0).
 """
 
 from __future__ import annotations
