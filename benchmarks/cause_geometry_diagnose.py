@@ -1,7 +1,7 @@
 """Diagnoses of subjects with measured layers: the causes' rays read off their geometry spaces against solved.
 
     python benchmarks/cause_geometry_diagnose.py [--subjects 8] [--seed 0] [--workers 2]
-        [--causes strain_stiffening] [--space-dir DIR]
+        [--causes strain_stiffening] [--space-dir DIR] [--read-only]
 
 The check a cause's geometry space must pass before it ships: does a diagnosis
 with its rays read (cubic interpolation of log M, solved only where the error
@@ -71,7 +71,7 @@ def _run(job):
     from skinsuction.diagnose._diagnose import Settings, diagnose
     from skinsuction.space import Geometry, OnDemandRays, read_ray_spaces
 
-    i, seed, draw, space_dir, causes = job
+    i, seed, draw, space_dir, causes, modes = job
     probes, t_d, t_h, x1d, ratio, x2d = draw
     data = _data(i, seed, *draw)
     row = {"subject": i, "probes": "+".join(f"{p:g}" for p in probes), "t_d": t_d,
@@ -81,7 +81,7 @@ def _run(job):
     g = Geometry(t_d, t_h, given=("t_d", "t_h"), sd={"t_d": SD_MM})
     spaces = {k: v for k, v in read_ray_spaces(space_dir).items()
               if k == "neo_hookean" or k in causes}
-    for mode, geometry in (("read", "auto"), ("solved", None)):
+    for mode, geometry in modes:
         with tempfile.TemporaryDirectory() as cache:
             solver = OnDemandRays(spaces["neo_hookean"].spec, cache_dir=cache, progress=None,
                                   geometry=geometry)
@@ -115,7 +115,10 @@ def main(argv=None):
     ap.add_argument("--causes", nargs="+", default=None,
                     help="causes weighed (default: those with a geometry space)")
     ap.add_argument("--out", default="benchmarks/out/cause_geometry_diagnose.csv")
+    ap.add_argument("--read-only", action="store_true",
+                    help="only the diagnosis reading its rays (its cost), no FE reference")
     args = ap.parse_args(argv)
+    modes = (("read", "auto"),) if args.read_only else (("read", "auto"), ("solved", None))
 
     from skinsuction.space import default_geometry_file, resolve_space
 
@@ -135,16 +138,23 @@ def main(argv=None):
                 float(10 ** rng.uniform(math.log10(0.003), math.log10(0.3))),
                 x1d * float(10 ** rng.uniform(math.log10(3), math.log10(300)))
                 if (i // 2) % 2 == 0 else 0.0)
-        jobs.append((i, args.seed + 3000 + i, draw, space_dir, causes))
+        jobs.append((i, args.seed + 3000 + i, draw, space_dir, causes, modes))
     df, seconds = run_rows(_run, jobs, args.workers, args.out)
     out = Path(args.out)
     ok = df[df["error"].isna()] if "error" in df else df
     print(f"{len(df)} subjects ({args.seed=}), {len(ok)} with both FE curves to 100 mbar; "
           f"{seconds:.0f} s wall on {args.workers} workers")
-    for mode in ("read", "solved"):
+    for mode, _ in modes:
         c = ok[f"{mode}_cpu_s"]
         print(f"diagnose, rays {mode:6s}: CPU median {c.median():.1f} s, max {c.max():.1f} s; "
               f"ray sets solved: median {ok[f'{mode}_ray_sets_solved'].median():.0f}")
+    if args.read_only:
+        for _, r in ok.iterrows():
+            print(f"  subject {r['subject']} ({r['probes']} mm, t_d {r['t_d']}, t_h {r['t_h']}):"
+                  f" {r['read_verdict']}, {r['read_cpu_s']:.1f} CPU-s, "
+                  f"{r['read_ray_sets_solved']} ray sets solved")
+        print(f"written: {out}")
+        return 0
     same = ok["read_verdict"] == ok["solved_verdict"]
     print(f"verdicts equal in {int(same.sum())}/{len(ok)}")
     for _, r in ok.iterrows():
