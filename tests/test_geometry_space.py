@@ -300,6 +300,42 @@ def test_the_default_geometry_space_is_the_fe_model_at_an_off_node_geometry(tmp_
         assert np.median(error) < 1e-3
 
 
+@pytest.mark.skipif(default_geometry_file() is None, reason="no geometry space built or shipped")
+def test_the_error_estimate_weighs_only_the_deflections_a_fit_reads(tmp_path):
+    """A thin hypodermis under the 6 mm probe: the nodes' rays splice onto their
+    fallbacks at different loads near the limit load, so the read ray misses the FE
+    one by 11 % up there, and by 0.02 % in the first 1.4 mm a fit of a 0.7 mm dome
+    reads (28 November 2026)."""
+    from skinsuction.space import BASELINE, read_ray_spaces
+    from skinsuction.space._shipped import default_space_dir
+
+    space = read_geometry_space(default_geometry_file())
+    ratio = space.spec.ratio_nodes[6]  # X1h/X1d = 0.00525
+    m, info = space.rays(6.0, 1.04, 0.57, ratio_nodes=[ratio])
+    everywhere = info["error_estimate"][0]
+    cap = 1.4
+    below = space.rays(6.0, 1.04, 0.57, ratio_nodes=[ratio], deflection_cap=cap)[1]
+    above_all = space.rays(6.0, 1.04, 0.57, ratio_nodes=[ratio],
+                           deflection_cap=2 * np.nanmax(m))[1]
+    assert above_all["error_estimate"][0] == everywhere
+    assert below["error_estimate"][0] < 0.01 < everywhere  # read; solved without the cap
+    spec = read_ray_spaces(default_space_dir())[BASELINE].spec
+    solved, _ = OnDemandRays(spec, cache_dir=tmp_path, geometry=None, progress=None).rays(
+        6.0, _layers(1.04, 0.57), ratio_nodes=[ratio])
+    fe, read = solved[0, 0], m[0, 0]
+    ok = np.isfinite(fe) & np.isfinite(read) & (fe > 0)
+    error = np.abs(read[ok] / fe[ok] - 1)
+    weighed = read[ok] <= cap
+    assert error[weighed].max() <= below["error_estimate"][0] + 1e-4
+    assert error[~weighed].max() > 0.01  # what the cap leaves to the fit's reach
+    # the solver reads it at a measurement's reach, and solves it without one
+    solver = OnDemandRays(spec, cache_dir=tmp_path / "read", progress=None)
+    _, info = solver.rays(6.0, _layers(1.04, 0.57), ratio_nodes=[ratio], reads_up_to_mm=cap)
+    assert info["rays_solved"] == 0 and info["rays_interpolated"] == 1
+    _, info = solver.rays(6.0, _layers(1.04, 0.57), ratio_nodes=[ratio])
+    assert info["rays_solved"] == 1
+
+
 def _default_geometry_files():
     path = default_geometry_file()
     return [] if path is None else sorted(path.parent.glob("*.parquet"))

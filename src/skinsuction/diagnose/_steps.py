@@ -22,7 +22,7 @@ from skinsuction.errors import InputError
 from skinsuction.identify import IdentificationError
 from skinsuction.model import Skin
 from skinsuction.results import jsonable
-from skinsuction.space import BASELINE, GeometryOutsideSpace, spaces_at
+from skinsuction.space import BASELINE, GeometryOutsideSpace, fit_reach_mm, spaces_at
 
 from ._data import prepare_data
 from ._fit import fit_bounds, fit_intervals, fit_model, nested_start, with_space_error
@@ -107,7 +107,8 @@ class Run:
         """The spaces ``names`` at the subject's layers, and their notes."""
         try:
             return spaces_at({n: self.given_spaces[n] for n in names}, self.data.probes,
-                             self.geometry, self.on_demand, ratio_window=window)
+                             self.geometry, self.on_demand, ratio_window=window,
+                             reads_up_to_mm=fit_reach_mm(self.data.curves))
         except GeometryOutsideSpace as err:
             raise InputError(f"{self.data.path}: {err}") from None
 

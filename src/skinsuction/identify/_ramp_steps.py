@@ -144,11 +144,12 @@ def setup_ramp(data, space, *, objective, probe_mm, alpha, curve, geometry) -> R
         Its ``warnings`` start with the data's and the geometry's.
     """
     from skinsuction.measured import geometry_of
+    from skinsuction.space import fit_reach_mm
 
     geometry_warnings = []
     if geometry is None:
         geometry, geometry_warnings = geometry_of(data)
-    space = space.at(geometry)
+    space = space.at(geometry, reads_up_to_mm=fit_reach_mm(data.curves))
     probes = space.check_probes(probes_of(objective, probe_mm, data.probes))
     spaces = {p: space.probe(p) for p in probes}
     for c in data.curves:

@@ -39,7 +39,7 @@ import numpy as np
 from skinsuction._files import file_sha256
 from skinsuction.errors import InputError
 from skinsuction.model import Skin
-from skinsuction.space import LoadedSpace, load_space
+from skinsuction.space import LoadedSpace, fit_reach_mm, load_space
 
 from ._identification import Identification, write_identification
 from ._ramp_intervals import noise_and_intervals, thickness_uncertainty
@@ -171,7 +171,7 @@ def identify_measured(
     data = measured_path if isinstance(measured_path, MeasuredData) else load_measured(measured_path)
     check_against_space(data, available_probes=space.available_probes)
     geometry, geometry_warnings = geometry_of(data, **(thickness or {}))
-    space = space.at(geometry)
+    space = space.at(geometry, reads_up_to_mm=fit_reach_mm(data.curves))
     probes_needed = space.check_probes(probes_of(objective, probe_mm, data.probes))
     # the pressures against the space's reach, known once the layers are
     check_against_space(data, available_probes=space.available_probes,

@@ -143,10 +143,11 @@ def prepare_time_fit(data, space, *, probes=None, curve=None, noise_um=None, pha
     geometry)}``; raises :class:`InputError` for a suction beyond the space's reach.
     """
     from skinsuction.measured import geometry_of
+    from skinsuction.space import fit_reach_mm
 
     geometry, warnings = geometry_of(data, **(thickness or {}))
     warnings = list(getattr(data, "warnings", ())) + list(warnings)
-    space = space.at(geometry)
+    space = space.at(geometry, reads_up_to_mm=fit_reach_mm(data.curves))
     curves = _select(data, probes, curve)
     warnings += [f"geometry: {a}" for a in geometry.assumptions()]
     if any(v for v in (getattr(geometry, "sd", None) or {}).values()):

@@ -68,9 +68,11 @@ from ._causes import (
     registry_from_config,
 )
 from ._geometry import (
+    FIT_REACH,
     THICKNESS_RESOLUTION_MM,
     GeometryOutsideSpace,
     ThicknessNuisance,
+    fit_reach_mm,
     spaces_at,
     window_nodes,
 )
@@ -213,7 +215,7 @@ __all__ = [
     "NeoHookeanSlice", "RayInterpolant", "TabulatedInterpolant",
     # every probe and the subject's layers
     "DEFAULT_LAYERS_MM", "Geometry", "GeometryOutsideSpace", "OnDemandRays",
-    "default_cache_dir", "spaces_at", "ThicknessNuisance", "window_nodes",
+    "default_cache_dir", "spaces_at", "fit_reach_mm", "FIT_REACH", "ThicknessNuisance", "window_nodes",
     "GEOMETRY_FOLDER", "GeometryGrid", "GeometrySpace", "assemble_geometry_space",
     "default_geometry_file", "read_geometry_space", "same_rays", "ship_geometry_space",
     "geometry_file_for", "cause_coordinates", "cause_geometry_space",

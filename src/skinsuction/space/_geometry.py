@@ -174,8 +174,39 @@ def window_nodes(nodes, window=None) -> tuple:
 
 
 
+#: A fit reads a ray no higher than this times the largest measured deflection: a
+#: candidate whose curve runs twice as high as the data is no fit of it.
+FIT_REACH = 2.0
+
+
+def fit_reach_mm(curves) -> dict:
+    """``{probe: mm}``: the largest deflection a fit of the measured ``curves`` reads
+    under each probe, :data:`FIT_REACH` times the largest one measured there.
+
+    Parameters
+    ----------
+    curves : iterable
+        Objects with ``probe_mm`` and ``deflection_mm`` (a measurement's curves).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as C
+    >>> fit_reach_mm([C(probe_mm=2, deflection_mm=[0, 0.1, 0.25]),
+    ...               C(probe_mm=6, deflection_mm=[0, 0.9])])
+    {2.0: 0.5, 6.0: 1.8}
+    """
+    out = {}
+    for c in curves:
+        m = np.asarray(c.deflection_mm, dtype=float)
+        top = float(np.nanmax(m)) if np.isfinite(m).any() else math.nan
+        p = float(c.probe_mm)
+        if math.isfinite(top):
+            out[p] = max(out.get(p, 0.0), FIT_REACH * top)
+    return out
+
+
 def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays | None = None,
-              solve_causes: bool = True, ratio_window=None):
+              solve_causes: bool = True, ratio_window=None, reads_up_to_mm=None):
     """The ray spaces of one measurement: every model at its probes and layers.
 
     Parameters
@@ -200,6 +231,11 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
         it (:func:`window_nodes`), each cause's space is cut to them.  A
         diagnosis centres it on the neo-Hookean fit and widens it where a cause's
         fit reaches its edge; a fraction of the FE rays.  Default: every node.
+    reads_up_to_mm : dict probe -> float, optional
+        The largest deflection (mm) a fit of the measurement can read under each
+        probe (:func:`fit_reach_mm`): rays read off a geometry space are solved
+        where their error estimate exceeds the tolerance below it only
+        (:meth:`OnDemandRays.rays`).  Default: at any deflection.
 
     Returns
     -------
@@ -227,7 +263,8 @@ def spaces_at(spaces: dict, probes, geometry: Geometry, on_demand: OnDemandRays 
     skinsuction.space._geometry.GeometryOutsideSpace: no neo-Hookean rays of the 4 mm probe for ...
     """
     base = spaces[BASELINE]
-    at = _Measurement([float(p) for p in probes], geometry, base, on_demand)
+    at = _Measurement([float(p) for p in probes], geometry, base, on_demand,
+                      reads_up_to_mm=dict(reads_up_to_mm or {}))
     rays = _neo_hookean_rays(at)
     meta = {**base.metadata, "geometry": geometry.to_dict()}
     out = {BASELINE: RaySpace(None, at.spec, np.array([math.nan]), rays, meta)}
@@ -267,6 +304,8 @@ class _Measurement:
     base: RaySpace
     on_demand: OnDemandRays | None
     notes: list = field(default_factory=list)
+    #: probe -> the largest deflection a fit reads (mm), see :func:`spaces_at`
+    reads_up_to_mm: dict = field(default_factory=dict)
 
     def __post_init__(self):
         self.layers = _rounded_layers(self.geometry, self.notes)
@@ -278,6 +317,11 @@ class _Measurement:
         spec = self.base.spec if own else self.base.spec.untailed()
         self.spec = replace(spec, probes_mm=tuple(self.probes))
         self.n_loads = len(self.spec.pressures_mbar)
+
+    def reach(self, p) -> dict:
+        """``{"reads_up_to_mm": mm}`` for a solver's call at probe ``p``, if known."""
+        v = self.reads_up_to_mm.get(p)
+        return {} if v is None else {"reads_up_to_mm": v}
 
     def cut(self, rays: np.ndarray) -> np.ndarray:
         """The space's own rays (…, n_p) cut to this measurement's loads."""
@@ -318,7 +362,7 @@ def _neo_hookean_rays(at: _Measurement) -> dict:
                 f"no neo-Hookean rays of the {p:g} mm probe for {at.where()} "
                 f"in the space (it has {', '.join(f'{q:g}' for q in base.probes_mm)} mm with "
                 "1 mm layers); allow solving them on demand")
-        rays[p], info = at.on_demand.rays(p, at.layers)
+        rays[p], info = at.on_demand.rays(p, at.layers, **at.reach(p))
         solved.append((p, info))
     for p, info in solved:
         where = "" if info["cache"] == "geometry space" else f"; cached in {info['cache']}"
@@ -351,7 +395,8 @@ def _solved_cause(name: str, space: RaySpace, at: _Measurement, ratio_window) ->
         if at.default and space.has_probe(p):
             arrays[p] = at.cut(space.rays(p)[keep])
             continue
-        arrays[p], info = at.on_demand.rays(p, at.layers, space.cause, **_subset(nodes, full))
+        arrays[p], info = at.on_demand.rays(p, at.layers, space.cause, **_subset(nodes, full),
+                                            **at.reach(p))
         for k in total:
             total[k] += info.get(k, 0)
     window = ("" if len(nodes) == len(full) else
@@ -398,13 +443,11 @@ def _carried_cause(name: str, space: RaySpace, at: _Measurement, rays: dict):
 def _attach_nuisances(out: dict, own_brackets: set, at: _Measurement) -> None:
     """Give every space the thickness nuisances of the given layers with an sd: the
     neo-Hookean brackets, or a cause's own where its rays were solved at these layers."""
-    nuisance = _nuisances(out[BASELINE], at.probes, at.geometry, at.layers, at.on_demand,
-                          at.notes)
+    nuisance = _nuisances(out[BASELINE], at, at.notes)
     for name, space in out.items():
         space.nuisance = nuisance
         if nuisance and name in own_brackets:
-            space.nuisance = _nuisances(space, at.probes, at.geometry, at.layers, at.on_demand,
-                                        [], at.base.spec.ratio_nodes)
+            space.nuisance = _nuisances(space, at, [], at.base.spec.ratio_nodes)
     if nuisance and own_brackets:
         at.notes.append(f"{', '.join(sorted(own_brackets))}: the thickness nuisance moves each "
                         "cause's curve by its own rays at ±1 sd (solved on demand)")
@@ -416,10 +459,11 @@ def _subset(nodes, full) -> dict:
     return {"ratio_nodes": tuple(nodes)} if len(nodes) < len(full) else {}
 
 
-def _nuisances(center, probes, geometry, layers, on_demand, notes, full_nodes=()) -> tuple:
+def _nuisances(center, at: _Measurement, notes, full_nodes=()) -> tuple:
     """A :class:`ThicknessNuisance` per given thickness with an sd (rays on demand):
     brackets of ``center``'s own model (neo-Hookean, or a cause at every node) at
-    ``layers`` (by path) with that thickness moved by -1 and +1 sd."""
+    the measurement's layers (by path) with that thickness moved by -1 and +1 sd."""
+    probes, geometry, layers, on_demand = at.probes, at.geometry, at.layers, at.on_demand
     cause = center.cause
     coordinates = np.array([math.nan]) if cause is None else np.asarray(cause.nodes, float)
     out = []
@@ -439,7 +483,8 @@ def _nuisances(center, probes, geometry, layers, on_demand, notes, full_nodes=()
             rays = {}
             for p in probes:
                 rays[p], info = on_demand.rays(p, other, cause,
-                                               **_subset(center.spec.ratio_nodes, full_nodes))
+                                               **_subset(center.spec.ratio_nodes, full_nodes),
+                                               **at.reach(p))
                 if not info.get("rays_interpolated", 0):  # solved whole, or read from the cache
                     info = {**info, "rays_solved": info.get("rays", 0)}
                 for k in total:

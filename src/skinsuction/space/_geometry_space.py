@@ -178,7 +178,7 @@ class GeometrySpace:
         return self.grid.covers(t_d / a, t_h / a)
 
     def rays(self, probe_mm: float, t_d: float, t_h: float, ratio_nodes=None,
-             coordinate: float | None = None):
+             coordinate: float | None = None, deflection_cap: float | None = None):
         """The rays of one probe at the layers ``t_d``, ``t_h`` (mm).
 
         Parameters
@@ -191,6 +191,10 @@ class GeometrySpace:
             Only these X1h/X1d nodes of the specification (default all).
         coordinate : float, optional
             The cause's node (a cause's space only: one of :attr:`coordinates`).
+        deflection_cap : float, optional
+            The error estimate weighs only the loads where the ray's deflection is at
+            most this (mm, at this probe): a measurement's fit never reads a ray far
+            above the measured curve (default: every load).
 
         Returns
         -------
@@ -225,9 +229,11 @@ class GeometrySpace:
         # a ray is cut at its first NaN: beyond, the stencil lacks a node
         cut = np.cumsum(np.isnan(m), axis=1) > 0
         m[cut] = np.nan
+        weighed = None if deflection_cap is None else ~(m > deflection_cap)
         info = {"source": "geometry space", "rays": len(index),
                 "stopped_early": int(cut[:, -1].sum()),
-                "error_estimate": self._error_estimate(log_m, x, y, i, wi, j, wj, k, index)}
+                "error_estimate": self._error_estimate(log_m, x, y, i, wi, j, wj, k, index,
+                                                       weighed)}
         return m[:, None, :], info
 
     def _coordinate_index(self, coordinate) -> int:
@@ -247,9 +253,10 @@ class GeometrySpace:
         block = self._log[i:i + wi.size, j:j + wj.size, k][:, :, index]  # (4, 4, n_r, n_p)
         return np.einsum("a,b,abrp->rp", wi, wj, block)
 
-    def _error_estimate(self, log_m, x, y, i, wi, j, wj, k, index):
+    def _error_estimate(self, log_m, x, y, i, wi, j, wj, k, index, weighed=None):
         """Per ray, the largest change of log M (about the relative error) when either
-        axis's stencil is shifted by one node, over the loads where both exist.
+        axis's stencil is shifted by one node, over the loads where both exist (and
+        ``weighed``, a mask of the loads, holds).
 
         The shifted stencils hold the same cell, so their spread is of the order of
         the interpolation error; a shift that meets a stopped ray is left out.
@@ -268,6 +275,8 @@ class GeometrySpace:
                                           index)
                 d = np.abs(other - log_m)
                 d[~np.isfinite(d)] = 0.0
+                if weighed is not None:
+                    d[~weighed] = 0.0
                 spread = np.maximum(spread, d.max(axis=1))
         return spread
 

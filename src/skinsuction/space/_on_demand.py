@@ -177,7 +177,8 @@ class OnDemandRays:
         return [ray_id(_ray_params(self.spec, probe_mm, r, cause, coordinate,
                                    _keywords(layers), digits=6)) for r in nodes]
 
-    def rays(self, probe_mm: float, layers, cause=None, ratio_nodes=None):
+    def rays(self, probe_mm: float, layers, cause=None, ratio_nodes=None,
+             reads_up_to_mm: float | None = None):
         """The rays of one probe at one geometry.
 
         The rays are solved for the reference aperture of the dimensionless
@@ -200,6 +201,13 @@ class OnDemandRays:
             Only these X1h/X1d nodes of the specification (``n_r`` of them;
             default all); the rays of other nodes solved later join the same
             cache file.
+        reads_up_to_mm : float, optional
+            The largest deflection a fit of the measurement can read (mm): a ray
+            read off a geometry space is solved only where its error estimate
+            exceeds the tolerance at deflections up to it (default: anywhere).  A
+            ray runs on to the dome's limit load, where the grid's nodes splice onto
+            their fallbacks at different loads; a measurement that reads the first
+            third of it need not pay for that.
 
         Returns
         -------
@@ -216,20 +224,20 @@ class OnDemandRays:
         ref = {path: round_sig(similar_length(t, probe_mm), 6)
                for path, t in layer_thicknesses(layers).items()}
         if cause is None:
-            return self._read(ref, a, None, None, nodes)
+            return self._read(ref, a, None, None, nodes, reads_up_to_mm)
         columns, infos = [], []
         for c in cause.nodes:
             if c == cause.neutral:
-                m, info = self._read(ref, a, None, None, nodes)
+                m, info = self._read(ref, a, None, None, nodes, reads_up_to_mm)
             else:
-                m, info = self._read(ref, a, cause, c, nodes)
+                m, info = self._read(ref, a, cause, c, nodes, reads_up_to_mm)
             columns.append(m[:, 0])
             infos.append(info)
         info = {"cache": str(self.dir), **{k: sum(i.get(k, 0) for i in infos) for k in (
             "rays", "stopped_early", "rays_interpolated", "rays_solved")}}
         return np.stack(columns, axis=1), info
 
-    def _from_geometry(self, ref, a, cause, c, nodes):
+    def _from_geometry(self, ref, a, cause, c, nodes, cap=None):
         """The rays at ``ref`` (scaled by ``a``) read off the geometry space, and the
         nodes whose error estimate exceeds the tolerance (to be solved); None where
         the spaces do not hold them (no space of that cause, outside its grid)."""
@@ -244,7 +252,8 @@ class OnDemandRays:
                 return None
         if not space.grid.covers(layers["t_d"], layers["t_h"]):
             return None
-        m, info = space.rays(2.0, layers["t_d"], layers["t_h"], nodes, coordinate)
+        m, info = space.rays(2.0, layers["t_d"], layers["t_h"], nodes, coordinate,
+                             deflection_cap=None if cap is None else cap / a)
         self.interpolated += 1
         return m * a, info
 
@@ -257,11 +266,11 @@ class OnDemandRays:
                                                                   self.spec)
         return self._cause_spaces[cause.name]
 
-    def _read(self, ref, a, cause, c, nodes):
+    def _read(self, ref, a, cause, c, nodes, cap=None):
         """The rays at the reference layers ``ref`` (2 mm aperture) scaled by ``a``: read
         off the geometry space where its error estimate is within the tolerance, else
         from the cache file, the missing ones solved into it first."""
-        found = self._from_geometry(ref, a, cause, c, nodes)
+        found = self._from_geometry(ref, a, cause, c, nodes, cap)
         if found is None:
             return self._read_cache(ref, a, cause, c, nodes)
         m, info = found

@@ -201,6 +201,9 @@ class LoadedSpace:
         #: solver of rays for a probe or layers the scale-free space lacks (None: refused)
         self.on_demand = on_demand
         self._shared = {} if _shared is None else _shared  # slices by (probe, geometry)
+        #: probe -> the largest deflection a fit reads (mm; :func:`fit_reach_mm`), for
+        #: the rays read off a geometry space: see :meth:`at`
+        self.reads_up_to_mm = {}
 
     @classmethod
     def given(cls, spaces: dict, bottom: str = "fixed") -> "LoadedSpace":
@@ -224,19 +227,27 @@ class LoadedSpace:
         """Probes (mm) a measured file may hold: those of a grid; any for rays (None)."""
         return None if self.rays is not None else list(self.spaces)
 
-    def at(self, geometry: Geometry) -> "LoadedSpace":
+    def at(self, geometry: Geometry, reads_up_to_mm=None) -> "LoadedSpace":
         """This space for a measurement with its own layers (shares its caches).
 
         Parameters
         ----------
         geometry : Geometry
+        reads_up_to_mm : dict probe -> float, optional
+            The largest deflection a fit of the measurement reads under each probe
+            (:func:`skinsuction.space.fit_reach_mm`): rays read off a geometry space
+            are solved only where their error estimate is large below it.  Default:
+            this space's (none: at any deflection).
 
         Returns
         -------
         LoadedSpace
         """
-        return LoadedSpace(self.spaces, self.info, self._p_range, self.bottom, self.rays,
-                           geometry, self.on_demand, self._shared)
+        out = LoadedSpace(self.spaces, self.info, self._p_range, self.bottom, self.rays,
+                          geometry, self.on_demand, self._shared)
+        out.reads_up_to_mm = dict(self.reads_up_to_mm if reads_up_to_mm is None
+                                  else reads_up_to_mm)
+        return out
 
     def notes(self, probes) -> list:
         """What the geometry of :meth:`probe` assumed or solved, for the outputs.
@@ -296,16 +307,20 @@ class LoadedSpace:
         if not lo <= float(p) <= hi:
             raise InputError(f"probe diameter {float(p):g} mm is outside the apertures the model "
                              f"is meant for ({lo:g}-{hi:g} mm; Cutometer probes are 2, 4, 6, 8 mm)")
+        reach = self.reads_up_to_mm.get(float(p))
         key = (float(p), self._geometry_key())
+        if not self.geometry.is_default and reach is not None:
+            key += (round(reach, 4),)  # another reach may solve other rays
         if key not in self._shared:
             try:
                 spaces, notes = spaces_at({BASELINE: self.rays}, [float(p)], self.geometry,
-                                          self.on_demand)
+                                          self.on_demand, reads_up_to_mm={float(p): reach}
+                                          if reach is not None else None)
             except GeometryOutsideSpace as err:
                 raise InputError(f"{self.info['path']}: {err} (the command-line option "
                                  "--no-solve refuses it; drop it)") from None
             self._shared[key] = NeoHookeanSlice(spaces[BASELINE], float(p))
-            self._shared[("notes", *key)] = notes
+            self._shared[("notes", float(p), self._geometry_key())] = notes
         return self._shared[key]
 
     def cause_names(self) -> list:
