@@ -736,13 +736,14 @@ class _WindowSolver:
     """Serves the toy spaces' rays as a solver on demand would, and records the asks."""
 
     def __init__(self, spaces):
-        self.spaces, self.asked = spaces, []
+        self.spaces, self.asked, self.reach = spaces, [], {}
 
-    def rays(self, probe, layers, cause=None, ratio_nodes=None):
+    def rays(self, probe, layers, cause=None, ratio_nodes=None, reads_up_to_mm=None):
         s = self.spaces[BASELINE if cause is None else cause.name]
         nodes = s.spec.ratio_nodes if ratio_nodes is None else tuple(ratio_nodes)
         keep = [s.spec.ratio_nodes.index(r) for r in nodes]
         self.asked.append((None if cause is None else cause.name, nodes))
+        self.reach[probe] = reads_up_to_mm
         a = s.rays(probe)[keep]
         return a, {"rays": a.shape[0] * a.shape[1], "stopped_early": 0, "cache": "-"}
 
@@ -760,6 +761,9 @@ def test_causes_solved_in_a_window_around_the_baseline_fit_as_with_every_node(de
         reports[window] = diagnose(data, spaces, Settings(cause_window_decades=window),
                                    geometry=given, on_demand=solver)
         asked = [len(n) for c, n in solver.asked if c is not None]
+        # the solver hears how high a fit reads: twice the largest measured deflection
+        for c in data.curves:
+            assert solver.reach[c.probe_mm] == pytest.approx(2 * np.max(c.deflection_mm))
         if window is None:
             assert set(asked) == {13}
         else:
