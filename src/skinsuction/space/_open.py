@@ -201,9 +201,7 @@ class LoadedSpace:
         #: solver of rays for a probe or layers the scale-free space lacks (None: refused)
         self.on_demand = on_demand
         self._shared = {} if _shared is None else _shared  # slices by (probe, geometry)
-        #: probe -> the largest deflection a fit reads (mm; :func:`fit_reach_mm`), for
-        #: the rays read off a geometry space: see :meth:`at`
-        self.reads_up_to_mm = {}
+        self.reads_up_to_mm = {}  # probe -> how high a fit reads (mm), see :meth:`at`
 
     @classmethod
     def given(cls, spaces: dict, bottom: str = "fixed") -> "LoadedSpace":
@@ -234,10 +232,8 @@ class LoadedSpace:
         ----------
         geometry : Geometry
         reads_up_to_mm : dict probe -> float, optional
-            The largest deflection a fit of the measurement reads under each probe
-            (:func:`skinsuction.space.fit_reach_mm`): rays read off a geometry space
-            are solved only where their error estimate is large below it.  Default:
-            this space's (none: at any deflection).
+            How high a fit of the measurement reads (:func:`fit_reach_mm`, passed to
+            :func:`spaces_at`).  Default: this space's (none: at any deflection).
 
         Returns
         -------
