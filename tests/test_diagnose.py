@@ -435,6 +435,25 @@ def test_a_fit_inside_the_space_is_not_flagged():
     assert not any(f["at_bound"] for f in report["baseline"]["at_bound"].values())
 
 
+def test_leaving_the_holdout_out_changes_no_fit():
+    # the holdout is no part of the decision; the detectability draws leave it out
+    # (a third of their cost) and must measure the diagnosis users get with it
+    spaces = toy_spaces()
+    data = _toy_data(0.03, 0.02, 1.09, "pre_tension", 2.0, 3)
+    fast = {"repeats": 1, "window_focusing": {"n_samples": 300, "n_best": 10,
+                                              "tolerance": 1e-6, "max_iter": 60}}
+    with_it = diagnose(data, spaces, Settings(**fast))
+    without = diagnose(data, spaces, Settings(**fast, holdout=False))
+    assert with_it["baseline"]["holdout_E_um"] is not None
+    assert without["baseline"]["holdout_E_um"] is None
+    assert with_it["cause"] == without["cause"] == "pre_tension"
+    assert with_it["verdict"] == without["verdict"]
+    for a, b in zip(with_it["candidates"], without["candidates"], strict=True):
+        assert a["cause"] == b["cause"] and a["parameters"] == b["parameters"]
+        assert a["delta_bic"] == b["delta_bic"]
+    assert with_it["baseline"]["parameters"] == without["baseline"]["parameters"]
+
+
 def test_one_probe_only_has_no_holdout():
     spaces = toy_spaces(kinds=("strain_stiffening",))
     data = _toy_data(0.03, 0.02, None, "none", 2.0, 4, probes=(6.0,))

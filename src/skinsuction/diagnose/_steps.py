@@ -103,6 +103,15 @@ class Run:
         """Whether the cross-probe holdout is measured."""
         return len(self.probes) >= 2 and self.settings.holdout
 
+    def holdout(self, space):
+        """The cross-probe holdout of a model's ``space`` (None, None without it).
+
+        Its seed is drawn whenever two probes are there, measured or not: the
+        holdout is no part of the decision, and leaving it out changes no other fit.
+        """
+        seed = next(self.seeds) if len(self.probes) >= 2 else None
+        return _holdout(space, self.fd, self.settings, seed) if self.two_probes else (None, None)
+
     def at_layers(self, names, window=None):
         """The spaces ``names`` at the subject's layers, and their notes."""
         try:
@@ -235,8 +244,7 @@ def fit_baseline(run: Run) -> Baseline:
     b = bic(fit.chi2, fit.n_params, run.n_points)
     bounds = fit_bounds(space, run.fd, fit.theta)
     ci = intervals_json(space, run.fd, fit.theta, run.noise, settings)
-    hold, hold_detail = (_holdout(space, run.fd, settings, next(run.seeds))
-                         if run.two_probes else (None, None))
+    hold, hold_detail = run.holdout(space)
     return Baseline(space, fit, test, b, bounds, ci, hold, hold_detail)
 
 
@@ -308,8 +316,7 @@ def fit_candidate(run: Run, name: str, space, base: Baseline) -> tuple:
     t = misfit_test(residual_dict(f, run.fd), run.sigma, run.noise.dof, settings.degree,
                     settings.alpha)
     b = bic(f.chi2, f.n_params, run.n_points)
-    hold, hold_detail = (_holdout(space, run.fd, settings, next(run.seeds))
-                         if run.two_probes else (None, None))
+    hold, hold_detail = run.holdout(space)
     bounds = fit_bounds(space, run.fd, f.theta)
     return {
         "intervals": (intervals_json(space, run.fd, f.theta, run.noise, settings)
