@@ -23,8 +23,9 @@
 #
 # The subset: config/ci.yaml (a whole config) plus an overlay written
 # below, and these targets:
-#   results/simulated_space/paper.parquet          simulate_point (grouped) + assemble_space
-#                                                  (paper space cut to 3 x 3 x 2 probes = 18 points)
+#   results/simulated_space/paper.parquet          simulate_row (grouped) + assemble_space
+#                                                  (paper space cut to 3 x 3 x 2 probes = 18 points,
+#                                                  6 rows)
 #   results/simulated_space/scale_free/neo_hookean.parquet
 #                                                  simulate_ray_bundle (grouped) + assemble_scale_free_space
 #                                                  (X1h/X1d cut to 0.001 and 0.1: 4 bundles; the
@@ -47,8 +48,9 @@
 #   SLURM_E2E_CORES=N      cores of one bundle (group) job, snakemake --cores (default: nproc)
 #   SLURM_E2E_MEM_MB=M     memory of one bundle job, snakemake --resources mem_mb=M, and
 #                          cap of every job's mem_mb (default: min(2000 x cores, node memory))
-#   SLURM_E2E_GROUP_COMPONENTS="fe_curves=9 fe_rays=2 fe_geometry=5"
-#                          grid points / ray bundles per cluster job (profile: 50 and 16)
+#   SLURM_E2E_GROUP_COMPONENTS="fe_curves=3 fe_rays=2 fe_geometry=5"
+#                          grid rows / ray bundles / geometry jobs per cluster job
+#                          (profile: 8, 16 and 8)
 #   SLURM_E2E_SETUP=0      use the running cluster as it is: install, configure and start
 #                          nothing (and use the plugin's default status command, sacct)
 #   SLURM_E2E_STATUS_COMMAND=sacct|squeue   override the status command
@@ -277,7 +279,7 @@ LOCAL_PID=$!
 # capped at what one job may get here, bundle size from --cores/--resources.
 CORES=${SLURM_E2E_CORES:-$(nproc)}
 MEM_MB=${SLURM_E2E_MEM_MB:-$((2000 * CORES < NODE_MEM_MB ? 2000 * CORES : NODE_MEM_MB))}
-GROUP_COMPONENTS=${SLURM_E2E_GROUP_COMPONENTS:-fe_curves=9 fe_rays=2 fe_geometry=5}
+GROUP_COMPONENTS=${SLURM_E2E_GROUP_COMPONENTS:-fe_curves=3 fe_rays=2 fe_geometry=5}
 PARTITION=${SLURM_PARTITION:-$DEFAULT_PARTITION}
 STATUS=${SLURM_E2E_STATUS_COMMAND:-$DEFAULT_STATUS}
 mapfile -t RES_ARGS < <(
@@ -351,7 +353,7 @@ if ! squeue --states=all -h --name "$RUN_ID" -o '%.8i %.10T %.10M  %k' | sort -n
     sacct -X --name "$RUN_ID" -o JobID,State,Elapsed,JobName%40 || true
 fi
 # every rule of the subset went through SLURM (the log path names the rule or group)
-for what in group_fe_curves_simulate_point group_fe_rays_simulate_ray_bundle \
+for what in group_fe_curves_simulate_row group_fe_rays_simulate_ray_bundle \
     group_fe_geometry_simulate_geometry_bundle rule_assemble_geometry_space \
     rule_assemble_space rule_assemble_scale_free_space rule_simulate_test_curve \
     rule_identification_test_curves rule_identification_runs rule_fig4_single_probe; do

@@ -255,7 +255,7 @@ def workflow_run(tmp_path_factory):
 def test_workflow_builds_every_identification_output(workflow_run):
     wd, args, out = workflow_run
     counts = job_counts(out)
-    assert "simulate_point" not in counts and "assemble_space" not in counts
+    assert "simulate_row" not in counts and "assemble_space" not in counts
     assert counts["simulate_test_curve"] == 2 and counts["identification_runs"] == 3
     for f in TARGETS:
         assert (wd / f).stat().st_size > 0, f
@@ -301,7 +301,7 @@ def test_workflow_reruns_follow_code_changes(workflow_run):
         objectives.write_text(original)
     assert counts.get("identification_runs") == 3 and counts.get("timing_table") == 1
     assert counts.get("fe_in_the_loop") == 1 and counts.get("fig8_ratio") == 1
-    assert "simulate_point" not in counts and "simulate_test_curve" not in counts
+    assert "simulate_row" not in counts and "simulate_test_curve" not in counts
     assert "fig3_boundary_conditions" not in counts
     fig7 = wd / "src" / "skinsuction" / "figures" / "fig7.py"
     original = fig7.read_text()

@@ -182,7 +182,7 @@ def test_the_checker_sees_an_upward_import(tmp_path):
 
 
 def test_an_fe_job_imports_nothing_above_the_space():
-    # the layers hold at run time too: an FE job (the code of simulate_point and
+    # the layers hold at run time too: an FE job (the code of simulate_row and
     # simulate_ray_bundle) must not import identification or diagnosis through the
     # package's lazy flat API (`from skinsuction import model` once imported
     # skinsuction.identify and SciPy's stats: 0.3 s of every FE job)
@@ -193,7 +193,7 @@ def test_an_fe_job_imports_nothing_above_the_space():
     code = (
         "import sys\n"
         "from skinsuction.jobs import job\n"  # the preamble of every workflow script
-        "from skinsuction.space import compute_point, compute_bundle\n"
+        "from skinsuction.space import compute_point, compute_points, compute_bundle\n"
         "from skinsuction import model\n"
         "import skinsuction.space._solve, skinsuction.space._ray_solve\n"
         "print(' '.join(sorted(sys.modules)))\n"
@@ -238,7 +238,7 @@ def private_imports(path: Path) -> list:
 
 
 def test_every_workflow_script_is_checked():
-    assert len(SCRIPTS) >= 20 and ROOT / "workflow" / "scripts" / "simulate_point.py" in SCRIPTS
+    assert len(SCRIPTS) >= 20 and ROOT / "workflow" / "scripts" / "simulate_row.py" in SCRIPTS
 
 
 @pytest.mark.parametrize("script", SCRIPTS, ids=lambda p: p.name)

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from skinsuction.model import ParameterError, Skin
 from skinsuction import provenance, space
-from skinsuction.space import COLUMNS, SimulatedSpace, assemble_space, compute_point, expand_axis, grid_points, parse_point_id, point_id, read_curve, read_space, round_sig, write_curve
+from skinsuction.space import COLUMNS, SimulatedSpace, assemble_space, compute_point, compute_points, expand_axis, grid_points, parse_point_id, point_id, read_curve, read_curves, read_space, round_sig, row_id, write_curve
 from skinsuction._files import atomic_output
 
 PAPER = {
@@ -365,6 +365,36 @@ def test_compute_point_records_a_model_exception_as_failed_point(tmp_path, stand
     assert len(frame) == len(PRESSURES)
     assert not frame["converged"].any() and frame["deflection_mm"].isna().all()
     assert frame["reason"].iloc[0].startswith("exception: RuntimeError: mesh generator crashed")
+
+
+def test_a_row_in_one_file_reads_back_as_its_points_alone(tmp_path, stand_in_model):
+    # the workflow solves a row of the grid in one job; every reader must see the same
+    # points and per-point metadata as from one file a point
+    row = [f"p6_fixed_x1d0.08_x1h{h}_x2d0_x2h0_td1_th1" for h in ("1e-05", "0.001", "0.1")]
+    assert {row_id(pid) for pid in row} == {"p6_fixed_x1d0.08_x2d0_x2h0_td1_th1"}
+    meta = {"source_hash": {"model": "h"}}
+    compute_points(row, tmp_path / "row.parquet", PRESSURES, {"refinement": 0.5}, meta)
+    alone = []
+    for pid in row:
+        compute_point(pid, tmp_path / f"{pid}.parquet", PRESSURES, {"refinement": 0.5}, meta)
+        alone.append(tmp_path / f"{pid}.parquet")
+    f_row, m_row = read_curves([tmp_path / "row.parquet"])
+    f_one, m_one = read_curves(alone)
+    cols = [c for c in COLUMNS if c != "seconds"]
+    pd.testing.assert_frame_equal(f_row[cols], f_one[cols])
+    assert sorted(m_row) == sorted(row) == sorted(m_one)
+    for pid in row:  # the same record but for its time of creation
+        a, b = (dict(m[pid], provenance=None) for m in (m_row, m_one))
+        assert a == b and m_row[pid]["provenance"]["versions"] == m_one[pid]["provenance"]["versions"]
+    # the model's exception is the third point's failure, recorded, not a lost row
+    assert f_row.loc[f_row["point_id"] == row[2], "reason"].iloc[0].startswith("exception:")
+    # a space picks its points out of a shared row, and misses none silently
+    some, metas = read_curves([tmp_path / "row.parquet"], points=row[:2])
+    assert set(some["point_id"]) == set(row[:2]) == set(metas)
+    with pytest.raises(ValueError, match=r"p6_fixed_x1d0.08_x1h0.5_.*row.parquet"):
+        read_curves([tmp_path / "row.parquet"], points=[row[0], row[1].replace("0.001", "0.5")])
+    with pytest.raises(ValueError, match="given twice"):
+        read_curves([tmp_path / "row.parquet", alone[0]])
 
 
 @pytest.fixture

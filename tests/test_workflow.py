@@ -20,7 +20,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from skinsuction.space import grid_points, point_id, read_space
+from skinsuction.space import grid_points, point_id, read_space, row_id
 
 ROOT = Path(__file__).resolve().parents[1]
 PARTS = ("Snakefile", "workflow", "config", "src", "data")  # data: the shipped example
@@ -82,16 +82,18 @@ def test_lint_is_clean(workdir):
 
 
 @pytest.mark.parametrize("name,n_space", [("config", 242), ("ci", 50)])
-def test_dry_run_lists_one_fe_job_per_grid_point(workdir, name, n_space):
+def test_dry_run_lists_one_fe_job_per_row_of_the_grids(workdir, name, n_space):
     out = snakemake(
         workdir, "-n", "--configfile", f"config/{name}.yaml", "--replace-workflow-config"
     )
     config = yaml.safe_load((workdir / "config" / f"{name}.yaml").read_text())
     n_fig3 = len(grid_points(config["figure3"], ignore=("pressure_mbar",)))
     counts = job_counts(out)
-    assert counts["simulate_point"] == len(expected_points(config)) == n_space + n_fig3
-    if name == "config":
-        assert counts["simulate_point"] == 242 + 78  # Figure 3 shares no point with eq. 3
+    points = expected_points(config)
+    assert len(points) == n_space + n_fig3
+    assert counts["simulate_row"] == len({row_id(p) for p in points})
+    if name == "config":  # eq. 3: 2 probes x 11 X1d; Figure 3: 2 probes x 3 bottoms
+        assert counts["simulate_row"] == 22 + 6
     assert counts["assemble_space"] == len(config["spaces"])
     assert counts["convergence_table"] == len(config["spaces"])
     assert counts["fig3_boundary_conditions"] == 1
@@ -118,7 +120,7 @@ def test_a_partial_overlay_still_merges_over_the_default(workdir):
     out = snakemake(workdir, "-n", *write_config(workdir, "overlay_only",
                                                  {"pressures_mbar": {"start": 0, "stop": 100,
                                                                      "step": 2}})[:2])
-    assert job_counts(out)["simulate_point"] == 320
+    assert job_counts(out)["simulate_row"] == 28
 
 
 def test_the_confusion_with_the_dermis_given_is_one_job_a_draw(workdir):
@@ -146,7 +148,7 @@ def test_the_confusion_with_both_layers_given_draws_neither_thickness(workdir):
 
 def test_default_invocation_runs_the_paper_study(workdir):
     counts = job_counts(snakemake(workdir, "-n"))
-    assert counts["simulate_point"] == 320
+    assert counts["simulate_row"] == 28
     # it reads the shipped scale-free space, checked against a sample of its rays
     config = yaml.safe_load((workdir / "config" / "config.yaml").read_text())
     assert config["scale_free_space"]["source"] == "shipped"
@@ -262,7 +264,7 @@ def stand_in_run(tmp_path_factory):
 def test_stand_in_run_builds_everything(stand_in_run):
     workdir, args, out = stand_in_run
     counts = job_counts(out)
-    assert counts["simulate_point"] == 4  # 2 space points, shared with Figure 3, + 2
+    assert counts["simulate_row"] == 2  # the space's row, shared with Figure 3, + its free row
     for f in (
         "results/simulated_space/tiny.parquet",
         "results/tables/tiny_convergence.csv",
@@ -271,11 +273,11 @@ def test_stand_in_run_builds_everything(stand_in_run):
         "results/tables/fig3_boundary_conditions.csv",
     ):
         assert (workdir / f).stat().st_size > 0, f
-    assert len(list((workdir / "results" / "curves").glob("*.parquet"))) == 4
+    assert len(list((workdir / "results" / "curves").glob("*.parquet"))) == 2
     assert not list(workdir.rglob(".*.tmp*")), "temporary files left behind"
     for log in (workdir / "logs" / "simulate").glob("*.log"):
         assert "converged=" in log.read_text()
-    assert len(list((workdir / "results" / "benchmarks" / "simulate").glob("*.tsv"))) == 4
+    assert len(list((workdir / "results" / "benchmarks" / "simulate").glob("*.tsv"))) == 2
     assert "Nothing to be done" in snakemake(workdir, "-n", *args)
 
 
@@ -317,16 +319,17 @@ def test_reruns_follow_config_and_code_changes(stand_in_run):
     finer = json.loads(json.dumps(TINY))
     finer["mesh"]["refinement"] = 0.5
     counts = job_counts(snakemake(workdir, "-n", *write_config(workdir, "finer", finer)))
-    assert counts["simulate_point"] == 4 and counts["fig3_boundary_conditions"] == 1
-    # a new grid value reruns only its new points; Figure 3 is untouched
+    assert counts["simulate_row"] == 2 and counts["fig3_boundary_conditions"] == 1
+    # a new grid value reruns only its row; Figure 3 reads that row too
     wider = json.loads(json.dumps(TINY))
     wider["spaces"]["tiny"]["x1h"].append(1.0e-3)
     counts = job_counts(snakemake(workdir, "-n", *write_config(workdir, "wider", wider)))
-    assert counts == {"simulate_point": 1, "assemble_space": 1, "convergence_table": 1, "all": 1}
+    assert counts == {"simulate_row": 1, "assemble_space": 1, "convergence_table": 1,
+                      "fig3_boundary_conditions": 1, "all": 1}
     # the model code reruns all FE jobs; the figure code only the figure
     init = workdir / "src" / "skinsuction" / "model" / "__init__.py"
     init.write_text(init.read_text() + "\n# changed\n")
-    assert job_counts(snakemake(workdir, "-n", *args))["simulate_point"] == 4
+    assert job_counts(snakemake(workdir, "-n", *args))["simulate_row"] == 2
     init.write_text(STAND_IN_MODEL)
     assert "Nothing to be done" in snakemake(workdir, "-n", *args)
     style = workdir / "src" / "skinsuction" / "figures" / "_style.py"
@@ -408,7 +411,7 @@ def test_end_to_end_with_the_real_model(tmp_path):
     workdir = copy_workflow(tmp_path)
     args = write_config(workdir, "tiny", REAL_TINY)
     out = snakemake(workdir, "--cores", "2", *args, timeout=1800)
-    assert job_counts(out)["simulate_point"] == 2
+    assert job_counts(out)["simulate_row"] == 2  # fixed and free
     s = read_space(workdir / "results" / "simulated_space" / "tiny.parquet")
     pts = s.points
     assert len(pts) == 1 and pts["converged"].all(), pts[["point_id", "reason"]]

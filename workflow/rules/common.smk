@@ -23,7 +23,9 @@ os.environ.update(
 from skinsuction.config import key_error, read_config  # noqa: E402
 from skinsuction.errors import InputError  # noqa: E402
 from skinsuction.provenance import source_hash  # noqa: E402
-from skinsuction.space import POINT_ID_PATTERN, expand_axis, grid_points, point_id  # noqa: E402
+from skinsuction.space import (  # noqa: E402
+    POINT_ID_PATTERN, ROW_ID_PATTERN, expand_axis, grid_points, point_id, row_id,
+)
 
 
 # ---------------------------------------------------------------- configuration
@@ -101,10 +103,17 @@ if FIG3_PRESSURE not in PRESSURES:
     )
 
 ALL_POINTS = sorted(set(FIG3_POINTS).union(*SPACE_POINTS.values()))
+# one FE job per row of the grids (a probe, bottom, X1d and layers; every X1h of every
+# space and Figure 3 there): 28 jobs of the default config, not 320 (a point is 0.6 s
+# of FE, a job of its own 2 s more of start-up and bookkeeping)
+ROWS = {}
+for _p in ALL_POINTS:
+    ROWS.setdefault(row_id(_p), []).append(_p)
 
 
 wildcard_constraints:
     point=POINT_ID_PATTERN,
+    row=ROW_ID_PATTERN,
     space="|".join(map(re.escape, SPACE_POINTS)),
 
 
@@ -138,18 +147,19 @@ def study_files(path):
 
 
 # ------------------------------------------------------------------ input lists
-def curve_file(point):
-    return f"results/curves/{point}.parquet"
+def curve_files(points):
+    """The row files (rule simulate_row) that hold these grid points."""
+    return sorted({f"results/curves/{row_id(p)}.parquet" for p in points})
 
 
 def space_curves(wildcards):
     """Curve files of the grid points of one simulated space."""
-    return [curve_file(p) for p in SPACE_POINTS[wildcards.space]]
+    return curve_files(SPACE_POINTS[wildcards.space])
 
 
 def fig3_curves(wildcards):
     """Curve files of the grid points of Figure 3."""
-    return [curve_file(p) for p in FIG3_POINTS]
+    return curve_files(FIG3_POINTS)
 
 
 def final_outputs():

@@ -27,6 +27,7 @@ rule fig3_boundary_conditions:
         "logs/figures/fig3_boundary_conditions.log",
     params:
         pressure_mbar=FIG3_PRESSURE,
+        points=FIG3_POINTS,
         code=code_hash("figures", *SPACE_CODE),
     threads: 1
     resources:

@@ -102,7 +102,7 @@ rule simulate_test_curve:
     conda:
         "../envs/skinsuction.yaml"
     script:
-        "../scripts/simulate_point.py"
+        "../scripts/simulate_test_curve.py"
 
 
 rule identification_test_curves:

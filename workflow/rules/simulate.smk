@@ -1,15 +1,18 @@
-"""One FE suction curve per grid point (shared by all spaces and figures)."""
+"""FE suction curves of the grids, a row per job (shared by all spaces and figures)."""
 
 
-rule simulate_point:
+rule simulate_row:
+    """The FE curves of one row of the grids: one probe, bottom, X1d and layers, every
+    X1h that a space or Figure 3 asks for there (a failed point is written as failed)."""
     output:
-        curve="results/curves/{point}.parquet",
+        curves="results/curves/{row}.parquet",
     log:
-        "logs/simulate/{point}.log",
+        "logs/simulate/{row}.log",
     benchmark:
-        "results/benchmarks/simulate/{point}.tsv"
+        "results/benchmarks/simulate/{row}.tsv"
     params:
         # a change of any of these reruns the FE jobs (Snakemake's params trigger)
+        points=lambda w: ROWS[w.row],
         pressures=PRESSURES,
         mesh=config["mesh"],
         fallback=config["mesh_fallback"],
@@ -18,8 +21,8 @@ rule simulate_point:
     threads: 1
     resources:
         mem_mb=2000,
-        runtime=30,
+        runtime=120,
     conda:
         "../envs/skinsuction.yaml"
     script:
-        "../scripts/simulate_point.py"
+        "../scripts/simulate_row.py"

@@ -9,6 +9,7 @@ rule assemble_space:
     log:
         "logs/space/{space}.log",
     params:
+        points=lambda w: SPACE_POINTS[w.space],
         code=code_hash(*SPACE_CODE),
     threads: 1
     resources:

@@ -10,4 +10,5 @@ with job(snakemake.log[0], threads=snakemake.threads):
         snakemake.output.space,
         config=snakemake.config,
         name=snakemake.wildcards.space,
+        points=snakemake.params.points,
     )

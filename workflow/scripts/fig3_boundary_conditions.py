@@ -11,4 +11,5 @@ with job(snakemake.log[0], threads=snakemake.threads):
         pdf=snakemake.output.pdf,
         csv=snakemake.output.table,
         pressure_mbar=snakemake.params.pressure_mbar,
+        points=snakemake.params.points,
     )

@@ -195,14 +195,17 @@ def plot_fig3(table: pd.DataFrame, xlim=(1e-5, 1e-1)):
     return fig
 
 
-def build_fig3(curve_paths, png, pdf, csv, pressure_mbar=None) -> pd.DataFrame:
-    """Read the Figure 3 curves, write the table (CSV) and the figure (PNG, PDF)."""
+def build_fig3(curve_paths, png, pdf, csv, pressure_mbar=None, points=None) -> pd.DataFrame:
+    """Read the Figure 3 curves, write the table (CSV) and the figure (PNG, PDF).
+
+    ``points``: the figure's point ids, when the files hold others too.
+    """
     import matplotlib.pyplot as plt
 
     from skinsuction.space import read_curves
     from skinsuction._files import write_table
 
-    frame, _ = read_curves(curve_paths)
+    frame, _ = read_curves(curve_paths, points)
     table = table_fig3(frame, pressure_mbar)
     write_table(table, csv)
     fig = plot_fig3(table)

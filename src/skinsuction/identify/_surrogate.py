@@ -135,8 +135,8 @@ def write_surrogate_space(path, dermis_X1, hypodermis_X1, pressures_mbar, probes
     """A simulated-space database filled with the analytic surrogate (not the FE model).
 
     For tests and demonstrations of the identification without FE runs.  With
-    ``curves_dir`` the per-point curve files are written there as well (as the
-    workflow's ``results/curves``).
+    ``curves_dir`` the curve files (one a row of the grid) are written there as well
+    (as the workflow's ``results/curves``).
 
     Parameters
     ----------
@@ -149,7 +149,7 @@ def write_surrogate_space(path, dermis_X1, hypodermis_X1, pressures_mbar, probes
     probes : sequence of float
         Apertures (mm).
     curves_dir : path, optional
-        Where to keep the per-point curve files.
+        Where to keep the curve files.
     name : str
         The space's name.
 
@@ -160,18 +160,19 @@ def write_surrogate_space(path, dermis_X1, hypodermis_X1, pressures_mbar, probes
     import tempfile
     from pathlib import Path
 
-    from skinsuction.space import assemble_space, grid_points, point_id, write_curve
+    from skinsuction.space import assemble_space, grid_points, point_id, row_id, write_curves
 
     from skinsuction.model import Skin
 
     spec = {"probes_mm": list(probes), "x1d": list(dermis_X1), "x1h": list(hypodermis_X1)}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(curves_dir) if curves_dir is not None else Path(tmp)
-        paths = []
+        rows = {}
         for params in grid_points(spec):
             skin = Skin.two_layer(params["x1d"], params["x1h"], bottom=params["bottom"])
             c = surrogate_curve(skin, params["probe_mm"], pressures_mbar=pressures_mbar)
-            paths.append(write_curve(c, params, folder / f"{point_id(params)}.parquet",
-                                     {"surrogate": True}))
+            rows.setdefault(row_id(point_id(params)), []).append((c, params, {}))
+        paths = [write_curves(points, folder / f"{row}.parquet", {"surrogate": True})
+                 for row, points in rows.items()]
         assemble_space(paths, path, config={"spaces": {name: spec}, "surrogate": True},
                        name=name)

@@ -161,7 +161,7 @@ from ._shipped_check import (
     sample_bundles,
     shipped_check_applies,
 )
-from ._solve import compute_point, solve_with_fallbacks, two_layer_skin
+from ._solve import compute_point, compute_points, solve_with_fallbacks, two_layer_skin
 from ._storage import (
     AXES,
     AXIS_PATHS,
@@ -170,6 +170,7 @@ from ._storage import (
     DEFAULTS,
     METADATA_KEY,
     POINT_ID_PATTERN,
+    ROW_ID_PATTERN,
     SIGNIFICANT_DIGITS,
     SPEC_KEYS,
     CorruptCurveError,
@@ -179,7 +180,9 @@ from ._storage import (
     read_curve,
     read_curves,
     round_sig,
+    row_id,
     write_curve,
+    write_curves,
 )
 
 __all__ = [
@@ -194,10 +197,11 @@ __all__ = [
     # storage
     "AXES", "AXIS_PATHS", "BOTTOMS", "COLUMNS", "DEFAULTS", "METADATA_KEY", "POINT_ID_PATTERN",
     "SIGNIFICANT_DIGITS", "SPEC_KEYS", "CorruptCurveError", "curve_frame", "parse_point_id",
-    "point_id", "read_curve", "read_curves", "round_sig", "write_curve",
+    "point_id", "read_curve", "read_curves", "round_sig", "row_id", "ROW_ID_PATTERN",
+    "write_curve", "write_curves",
     "atomic_output", "write_table",
     # FE solves
-    "compute_point", "solve_with_fallbacks", "two_layer_skin",
+    "compute_point", "compute_points", "solve_with_fallbacks", "two_layer_skin",
     # the grid layout
     "SimulatedSpace", "SLICE_PATHS", "assemble_space", "convergence_summary", "expand_axis", "grid_points",
     "read_space", "GriddedSpace",

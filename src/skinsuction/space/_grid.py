@@ -165,7 +165,7 @@ def grid_points(space_spec: dict, ignore=()) -> list[dict]:
     return [dict(zip(AXES, combo)) for combo in itertools.product(*(axes[a] for a in AXES))]
 
 
-def assemble_space(curve_paths, out_path, config: dict, name: str) -> "SimulatedSpace":
+def assemble_space(curve_paths, out_path, config: dict, name: str, points=None) -> "SimulatedSpace":
     """Assemble the curve files of one space into its database (atomic Parquet).
 
     Every grid point is kept: a point whose solve stopped early keeps its rows
@@ -178,13 +178,16 @@ def assemble_space(curve_paths, out_path, config: dict, name: str) -> "Simulated
     Parameters
     ----------
     curve_paths : iterable of path-like
-        Curve files of the space (one per grid point).
+        Curve files of the space (one per grid point, or one per row of the grid).
     out_path : path-like
         Database file, conventionally ``results/simulated_space/<name>.parquet``.
     config : dict
         The validated study configuration.
     name : str
         Name of the space in ``config["spaces"]``.
+    points : iterable of str, optional
+        The space's point ids, when the files hold other points too (a row
+        shared with Figure 3); each one must be found.
 
     Returns
     -------
@@ -193,7 +196,7 @@ def assemble_space(curve_paths, out_path, config: dict, name: str) -> "Simulated
     """
     from skinsuction.provenance import collect
 
-    frame, metas = read_curves(curve_paths)
+    frame, metas = read_curves(curve_paths, points)
     counts = frame.groupby("point_id")["pressure_mbar"].count()
     frame = _sorted(frame)
     points = frame.drop_duplicates("point_id")

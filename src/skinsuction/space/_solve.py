@@ -6,7 +6,7 @@ import logging
 
 import numpy as np
 
-from ._storage import parse_point_id, write_curve
+from ._storage import parse_point_id, write_curve, write_curves
 
 log = logging.getLogger(__name__)
 
@@ -231,13 +231,50 @@ def compute_point(
     """
     from skinsuction.provenance import collect
 
+    curve, params, own = _solve_point(pid, pressures_mbar, mesh, fallback)
+    meta = {"mesh": mesh, "mesh_fallback": fallback, "provenance": collect(), **(metadata or {})}
+    write_curve(curve, params, path, {**meta, **own})
+    return curve
+
+
+def _solve_point(pid, pressures_mbar, mesh, fallback):
+    """A point's curve, its axes and what its metadata says of its fallbacks."""
     params = parse_point_id(pid)
     curve, kept, first_reason = solve_with_fallbacks(params, pressures_mbar, mesh, fallback,
                                                      label=f"point {pid}")
-    meta = {"mesh": mesh, "mesh_fallback": fallback, "provenance": collect(), **(metadata or {})}
+    own = {}
     if kept:
-        meta["mesh_fallback_kept"] = kept
+        own["mesh_fallback_kept"] = kept
     if first_reason is not None:
-        meta["first_solve_reason"] = first_reason
-    write_curve(curve, params, path, meta)
-    return curve
+        own["first_solve_reason"] = first_reason
+    return curve, params, own
+
+
+def compute_points(
+    pids, path, pressures_mbar, mesh: dict | None = None, metadata=None, fallback=None
+):
+    """Run the FE model at several grid points (a row) and write them to one file.
+
+    The adapter of the workflow's ``simulate_row`` rule: :func:`compute_point`
+    for each point, in one process, written together (:func:`write_curves`)
+    once all are solved; a failed point is written as failed, as there.
+
+    Parameters
+    ----------
+    pids : sequence of str
+        Point ids (see :func:`point_id`).
+    path : path-like
+        Output file.
+    pressures_mbar, mesh, metadata, fallback
+        As :func:`compute_point`.
+
+    Returns
+    -------
+    list of Curve
+    """
+    from skinsuction.provenance import collect
+
+    solved = [_solve_point(pid, pressures_mbar, mesh, fallback) for pid in pids]
+    meta = {"mesh": mesh, "mesh_fallback": fallback, "provenance": collect(), **(metadata or {})}
+    write_curves(solved, path, meta)
+    return [curve for curve, _, _ in solved]

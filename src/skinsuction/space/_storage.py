@@ -128,6 +128,8 @@ _ID = re.compile(
 
 #: Regular expression for point ids, used as Snakemake wildcard constraint.
 POINT_ID_PATTERN = r"p[^/_]+_[a-z]+_x1d[^/_]+_x1h[^/_]+_x2d[^/_]+_x2h[^/_]+_td[^/_]+_th[^/_]+"
+#: Regular expression for row ids (:func:`row_id`).
+ROW_ID_PATTERN = r"p[^/_]+_[a-z]+_x1d[^/_]+_x2d[^/_]+_x2h[^/_]+_td[^/_]+_th[^/_]+"
 
 
 def point_id(params: dict) -> str:
@@ -161,6 +163,22 @@ def point_id(params: dict) -> str:
         f"_x2d{_fmt(p['x2d'])}_x2h{_fmt(p['x2h'])}"
         f"_td{_fmt(p['t_d'])}_th{_fmt(p['t_h'])}"
     )
+
+
+def row_id(pid: str) -> str:
+    """The row of the grid a point lies on: its id without X1h.
+
+    The workflow solves a row (one probe, bottom, X1d and layers, every X1h) in one
+    job and one file (:func:`write_curves`): a point costs 0.6 s of FE, a job of its
+    own some 2 s more of start-up and bookkeeping.
+
+    Examples
+    --------
+    >>> row_id("p6_fixed_x1d0.08_x1h1e-05_x2d0_x2h0_td1_th1")
+    'p6_fixed_x1d0.08_x2d0_x2h0_td1_th1'
+    """
+    parse_point_id(pid)  # a clear error for what is no point id
+    return re.sub(r"_x1h[^_]+", "", pid, count=1)
 
 
 def parse_point_id(pid: str) -> dict:
@@ -304,6 +322,44 @@ def write_curve(curve, params: dict, path, metadata: dict | None = None) -> Path
     return Path(path)
 
 
+def write_curves(points, path, metadata: dict | None = None) -> Path:
+    """Write the FE curves of several grid points to one Parquet file (atomically).
+
+    Parameters
+    ----------
+    points : iterable of (curve, params, dict)
+        Each point's curve (a failed one too), its axes and its own metadata (as
+        :func:`write_curve` takes them).
+    path : path-like
+        Output file, conventionally ``results/curves/<row_id>.parquet``.
+    metadata : dict, optional
+        Provenance shared by every point (the mesh, versions, source hash).
+
+    Returns
+    -------
+    Path
+        The file written; :func:`read_curves` gives each point back with the
+        metadata :func:`write_curve` would have stored.
+    """
+    frames, per_point = [], {}
+    for curve, params, own in points:
+        frame = curve_frame(curve, params)
+        pid = frame["point_id"].iloc[0]
+        if pid in per_point:
+            raise ValueError(f"grid point {pid} given twice")
+        frames.append(frame)
+        per_point[pid] = {
+            "point": {k: params.get(k, DEFAULTS.get(k, [None])[0]) for k in AXES},
+            "curve_info": dict(getattr(curve, "info", {}) or {}),
+            **(own or {}),
+        }
+    if not frames:
+        raise ValueError(f"{path}: no curves to write")
+    _write_parquet(pd.concat(frames, ignore_index=True), path,
+                   {**(metadata or {}), "points": per_point})
+    return Path(path)
+
+
 class CorruptCurveError(ValueError):
     """A curve file cannot be read (truncated or overwritten): its name and the remedy."""
 
@@ -333,12 +389,18 @@ def read_curve(path) -> tuple[pd.DataFrame, dict]:
             "to recompute it") from None
 
 
-def read_curves(paths) -> tuple[pd.DataFrame, dict]:
+def read_curves(paths, points=None) -> tuple[pd.DataFrame, dict]:
     """Concatenated rows of several curve files and their metadata by point id.
+
+    A file of several points (:func:`write_curves`) gives each point with the
+    metadata :func:`write_curve` would have stored for it alone.
 
     Parameters
     ----------
     paths : iterable of path-like
+    points : iterable of str, optional
+        Keep only these point ids (a row's file may hold points of other spaces);
+        each one must be found.
 
     Returns
     -------
@@ -349,19 +411,31 @@ def read_curves(paths) -> tuple[pd.DataFrame, dict]:
     Raises
     ------
     ValueError
-        If no file is given or a point is given twice.
+        If no file is given, a point is given twice or a point asked for is in no file.
     """
+    paths = list(paths)
     frames, metas = [], {}
     for path in paths:
         frame, meta = read_curve(path)
-        pid = meta.get("point_id", str(path))
-        if pid in metas:
-            raise ValueError(f"grid point {pid} given twice (second time: {path})")
+        shared = {k: v for k, v in meta.items() if k != "points"}
+        own = meta["points"] if "points" in meta else {meta.get("point_id", str(path)): {}}
+        for pid, extra in own.items():
+            if pid in metas:
+                raise ValueError(f"grid point {pid} given twice (second time: {path})")
+            metas[pid] = {**shared, "point_id": pid, **extra}
         frames.append(frame)
-        metas[pid] = meta
     if not frames:
         raise ValueError("no curve files given")
     frame = pd.concat(frames, ignore_index=True)
+    if points is not None:
+        points = list(points)
+        missing = sorted(set(points) - set(metas))
+        if missing:
+            raise ValueError(f"grid point {missing[0]} is in none of the curve files "
+                             f"{', '.join(map(str, paths[:3]))}{' ...' if len(paths) > 3 else ''}"
+                             f" ({len(missing)} missing); rerun the workflow to recompute them")
+        frame = frame[frame["point_id"].isin(points)].reset_index(drop=True)
+        metas = {pid: metas[pid] for pid in points}
     return frame, metas
 
 

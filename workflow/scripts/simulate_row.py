@@ -1,13 +1,13 @@
-"""Rule simulate_point: one FE suction curve at one grid point."""
+"""Rule simulate_row: the FE curves of one row of the grids, in one file."""
 
 from skinsuction.jobs import job
 
 with job(snakemake.log[0], threads=snakemake.threads):
-    from skinsuction.space import compute_point
+    from skinsuction.space import compute_points
 
-    compute_point(
-        snakemake.wildcards.point,
-        snakemake.output.curve,
+    compute_points(
+        snakemake.params.points,
+        snakemake.output.curves,
         pressures_mbar=snakemake.params.pressures,
         mesh=dict(snakemake.params.mesh),
         fallback=snakemake.params.fallback,
