@@ -346,9 +346,6 @@ if "diagnosis" in config:
                 code=code_hash("evaluation", "diagnose", "identify", "model", "figures",
                                *SPACE_CODE),
             threads: 2
-            # the study's longest job, on nothing but the shipped spaces: started first,
-            # the short jobs fill in around the rest (it ran last, alone, for 6 minutes)
-            priority: 10
             resources:
                 mem_mb=3000,
                 runtime=120,
