@@ -393,16 +393,8 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
                base_misfit=rep["baseline"]["systematic_misfit"],
                base_x1d=rep["baseline"]["parameters"]["X1d"],
                base_x1h=rep["baseline"]["parameters"]["X1h"])
-    # the verdict of the same fits under either detection rule (Settings.pattern_gate)
-
-    from skinsuction.diagnose import decide
-
+    row.update(_rule_columns(rep, settings))
     b = rep["baseline"]
-    for gate, tag in ((True, "gated"), (False, "ungated")):
-        _, c, v, amb, _, _ = decide(b["systematic_misfit"], b["bic"], b["at_bound"],
-                                    rep["candidates"], replace(settings, pattern_gate=gate))
-        row.update({f"named_{tag}": c, f"verdict_{tag}": v,
-                    f"ambiguous_with_{tag}": ";".join(amb)})
     named = next((c for c in rep["candidates"] if c["cause"] == rep["cause"]), None)
     sym = None if named is None else spaces[named["cause"]].cause.symbol
     if named is not None:
@@ -411,6 +403,19 @@ def run_draw(truth: str, seed: int, spaces: dict, settings=None, domain=None,
     # the 95 % intervals of the model the verdict stands on, for their coverage
     row.update(interval_columns((named or b).get("intervals"), sym))
     return row
+
+
+def _rule_columns(rep, settings) -> dict:
+    """The verdict of a diagnosis's fits under either detection rule
+    (``Settings.pattern_gate``): ``named_gated``, ``verdict_gated``, ... ``_ungated``."""
+    from skinsuction.diagnose import decide
+
+    b, out = rep["baseline"], {}
+    for gate, tag in ((True, "gated"), (False, "ungated")):
+        _, c, v, amb, _, _ = decide(b["systematic_misfit"], b["bic"], b["at_bound"],
+                                    rep["candidates"], replace(settings, pattern_gate=gate))
+        out.update({f"named_{tag}": c, f"verdict_{tag}": v, f"ambiguous_with_{tag}": ";".join(amb)})
+    return out
 
 
 def interval_columns(intervals, symbol=None) -> dict:
