@@ -51,6 +51,32 @@ def test_rows_read_their_own_loads_and_a_stopped_ray_shifts_its_stencil_back():
     assert w["loads"] == 10  # q = 14 reads the loads 8-20 (indices 6-9), not 24
 
 
+def test_the_piecewise_cubic_reads_as_the_stencils_do_with_stopped_rays_and_node_hits():
+    """evaluate (one cubic per cell and ray) against read (weights per load, the rules
+    of stopped rays): equal to rounding, the same NaN, at every kind of load."""
+    axis = LoadAxis(LOADS)
+    rng = np.random.default_rng(1)
+    x = np.log(LOADS[1:])
+    n = 60
+    rays = (rng.uniform(-1, 1, (n, 1)) + rng.uniform(0.3, 0.9, (n, 1)) * x
+            - rng.uniform(0, 0.05, (n, 1)) * x ** 2)
+    for i, stop in enumerate(rng.integers(2, LOADS.size, n)):
+        if i % 3:
+            rays[i, stop:] = np.nan  # stopped at LOADS[stop]
+    q = np.column_stack([
+        rng.uniform(0.0, LOADS[-1] * 1.05, (n, 40)),   # anywhere, beyond the last load too
+        rng.choice(LOADS, (n, 8)),                      # exactly at the nodes
+        rng.uniform(0.0, LOADS[1], (n, 4)),             # below q_1
+        np.full((n, 1), np.nan)])
+    for width in (rays.shape[1], axis.loads_for(q[:, :10]) - 1):
+        want = axis.read(rays[:, :width], axis.weights(q if width == rays.shape[1] else q[:, :10]))
+        got = axis.evaluate(rays[:, :width], q if width == rays.shape[1] else q[:, :10])
+        np.testing.assert_array_equal(np.isnan(got), np.isnan(want))
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-15)
+    assert np.isnan(got).any() and (~np.isnan(got)).any()
+    assert axis.loads_for(q[:, :10]) == axis.weights(q[:, :10])["loads"]
+
+
 @pytest.mark.slow
 def test_closer_to_fe_than_cubic_m_in_q_where_a_thin_dermis_bends_into_a_membrane():
     """A 0.6 mm dermis over a very soft hypodermis under the 8 mm probe: the onset

@@ -30,6 +30,7 @@ Examples
 from __future__ import annotations
 
 from skinsuction._files import atomic_output, write_table
+from skinsuction._memory import keep_freed_memory
 from skinsuction._threads import limit_threads
 from skinsuction.provenance import log_to_file
 
@@ -47,6 +48,7 @@ def job(log, threads=None):
         Size of the BLAS/OpenMP thread pools (``snakemake.threads``, or 1 where
         the job's threads are its worker processes).  Set when ``job`` is called,
         so call it before NumPy is imported.  ``None`` leaves the pools as they are.
+        The job keeps its freed memory for reuse (:mod:`skinsuction._memory`).
 
     Returns
     -------
@@ -57,4 +59,5 @@ def job(log, threads=None):
     """
     if threads is not None:
         limit_threads(threads)
+    keep_freed_memory()
     return log_to_file(log)

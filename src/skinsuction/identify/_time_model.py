@@ -240,10 +240,9 @@ class ElasticRays:
         theta = np.atleast_2d(np.asarray(theta, dtype=float))
         q = reference_pressure(np.maximum(pressure_mbar, 0.0), (10.0 ** theta[:, 0])[:, None],
                                self.x1d_ref)
-        weights = self._load.weights(q)
         # the space's NaN policy across rays, its interpolant along the load
-        return self._load.read(self._interp.combined_logs(theta, loads=weights["loads"]),
-                               weights)
+        return self._load.evaluate(
+            self._interp.combined_logs(theta, loads=self._load.loads_for(q)), q)
 
 
 def prony_of(theta, start: int = 2) -> tuple:

@@ -50,6 +50,14 @@ class LoadAxis:
         self.first = float(q[1])
         self._log = LagrangeAxis(np.log(q[1:]))
         self._onset = LagrangeAxis(q[:4])
+        # each cell of log q has one stencil, so the interpolant there is one cubic in
+        # (log q - its left node): its monomial coefficients are a fixed 4 x 4 map of the
+        # stencil's log M (the inverse Vandermonde matrix of the stencil's nodes)
+        nodes, m = self._log.nodes, self._log.m
+        self._cell_start = self._log._start_of[np.arange(1, nodes.size)]
+        self._to_monomials = np.stack([
+            np.linalg.inv(np.vander(nodes[s:s + m] - nodes[k], m, increasing=True))
+            for k, s in enumerate(self._cell_start)])
 
     def weights(self, q) -> dict:
         """The stencils and weights of the loads ``q`` (any shape, >= 0; NaN is outside).
@@ -74,6 +82,77 @@ class LoadAxis:
         return {"shape": q.shape, "high": high, "start": start, "w": w, "log_q": log_q,
                 "low": low, "w_low": w_low, "loads": max(loads, 4)}
 
+    def loads_for(self, q) -> int:
+        """How many loads (from q_0) reading ``q`` needs: ``weights(q)["loads"]``."""
+        top = np.nanmax(q, initial=0.0) if np.size(q) else 0.0
+        if not top >= self.first:
+            return 4
+        r = int(np.searchsorted(self._log.nodes, np.log(top), side="right"))
+        return max(int(self._log._start_of[r]) + self._log.m + 1, 4)
+
+    def evaluate(self, log_m, q) -> np.ndarray:
+        """``read(log_m, weights(q))``, row by row as one piecewise cubic in log q.
+
+        The same interpolant as :meth:`read` (to rounding): each row's cubic of a cell
+        is built once, then read at every load of the row in that cell, instead of a
+        stencil's weights per load. A load whose cell holds a stopped ray's NaN, and
+        the loads below ``q_1``, are read by :meth:`read` and its rules.
+
+        Parameters
+        ----------
+        log_m : ndarray, shape (N, L)
+            As in :meth:`read`.
+        q : ndarray, shape (N, u)
+            Loads, row i read off row i of ``log_m``.
+
+        Examples
+        --------
+        >>> q = np.array([0.0, 1.0, 2.0, 4.0, 8.0, 16.0])
+        >>> axis = LoadAxis(q)
+        >>> log_m = np.log(q[1:] ** 0.5)[None, :]
+        >>> x = np.array([[3.0, 0.5, 16.0, 20.0]])
+        >>> np.allclose(axis.evaluate(log_m, x), axis.read(log_m, axis.weights(x)),
+        ...             equal_nan=True)
+        True
+        """
+        q = np.asarray(q, dtype=float)
+        n_rows, width = log_m.shape
+        per_row = q.size // max(n_rows, 1)
+        nodes, m = self._log.nodes, self._log.m
+        cells = min(len(self._cell_start), width - m + 1)
+        out = np.full(q.size, np.nan)
+        flat = q.reshape(-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = np.log(flat)
+        cell = np.searchsorted(nodes, x, side="right") - 1
+        cell[x == nodes[-1]] -= 1  # the last node closes the last cell
+        here = np.flatnonzero((cell >= 0) & (cell < cells) & (flat >= self.first))
+        by_rules = np.ones(q.size, bool)  # the loads left to read()'s rules
+        by_rules[here] = False
+        by_rules[x > nodes[-1]] = False  # beyond the last load: NaN
+        if here.size:
+            stencils = self._cell_start[:cells, None] + np.arange(m)
+            coef = np.einsum("kij,nkj->nki", self._to_monomials[:cells], log_m[:, stencils])
+            c, rows = cell[here], here // per_row
+            at = (rows * cells + c) * m
+            dx = x[here] - nodes[c]
+            f = coef.reshape(-1)
+            v = f.take(at + m - 1)
+            for k in range(m - 2, -1, -1):
+                v = v * dx + f.take(at + k)
+            out[here] = np.exp(v)
+            # a stopped ray's NaN in the stencil: read()'s rules, unless it is at an end
+            # of a cell the load lies strictly inside (then every stencil fails: NaN)
+            bad = np.flatnonzero(np.isnan(v))
+            rb, cb = rows[bad], c[bad]
+            sure = ((dx[bad] > 0.0) & (x[here[bad]] < nodes[cb + 1])
+                    & (np.isnan(log_m[rb, cb]) | np.isnan(log_m[rb, cb + 1])))
+            by_rules[here[bad[~sure]]] = True
+        rest = np.flatnonzero(by_rules)
+        if rest.size:
+            out[rest] = self._read_flat(log_m, rest // per_row, flat[rest])
+        return out.reshape(q.shape)
+
     def read(self, log_m, weights) -> np.ndarray:
         """M at the loads of ``weights`` off the rays ``log_m``.
 
@@ -92,11 +171,20 @@ class LoadAxis:
             Deflections; NaN outside the loads or beyond a ray's reach.
         """
         shape = weights["shape"]
-        n_rays, width = log_m.shape
+        n_rays = log_m.shape[0]
         per_ray = int(np.prod(shape)) // max(n_rays, 1)
+        rows = np.repeat(np.arange(n_rays), per_ray)
+        return self._read_weighted(log_m, rows, weights).reshape(shape)
+
+    def _read_flat(self, log_m, rows, q) -> np.ndarray:
+        """M at the loads ``q`` (flat), load i off the ray ``rows[i]``."""
+        return self._read_weighted(log_m, rows, self.weights(q))
+
+    def _read_weighted(self, log_m, rows, weights) -> np.ndarray:
+        width = log_m.shape[1]
         flat = log_m.reshape(-1)
-        row0 = np.repeat(np.arange(n_rays) * width, per_ray)
-        out = np.empty(int(np.prod(shape)))
+        row0 = rows * width
+        out = np.empty(rows.size)
         hi = weights["high"]
         if hi.size:
             out[hi] = np.exp(self._read_log(flat, row0[hi], weights["start"], weights["w"],
@@ -108,7 +196,7 @@ class LoadAxis:
             nodes = np.zeros_like(w)
             nodes[:, 1:] = np.exp(flat.take(row0[lo, None] + np.arange(3)))
             out[lo] = np.where(w == 0.0, 0.0, w * nodes).sum(axis=1)
-        return out.reshape(shape)
+        return out
 
     def _read_log(self, flat, row0, start, w, log_q):
         """log M off the flat rays, stencil by stencil, the stopped rays' rules applied."""

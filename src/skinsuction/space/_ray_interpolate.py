@@ -219,10 +219,9 @@ class RayInterpolant:
         # the scaling law: the candidate at p reads its ray at load p / X1d, i.e. at the
         # pressure p X1d_ref / X1d of the FE run; beyond the ray's reach: NaN
         q = reference_pressure(self.pressure_mbar[None, :], x1d[:, None], self.x1d_ref)  # (N, u)
-        weights = self._load.weights(q)
         # the rays are combined up to the last load a stencil reads (a focused window
         # of stiff candidates reads a fraction of them)
-        vals = self._load.read(self.combined_logs(theta, loads=weights["loads"]), weights)
+        vals = self._load.evaluate(self.combined_logs(theta, loads=self._load.loads_for(q)), q)
         if out is None:
             return vals
         out[...] = vals
