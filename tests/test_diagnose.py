@@ -640,6 +640,8 @@ def test_confusion_draws_in_worker_processes_equal_one_process(monkeypatch):
     import io
     import os
 
+    import pandas as pd
+
     from skinsuction.evaluation import _confusion
 
     def fake_draw(truth, seed, spaces, settings=None, domain=None, cache_dir=None,
@@ -660,6 +662,14 @@ def test_confusion_draws_in_worker_processes_equal_one_process(monkeypatch):
     assert set(one["pid"]) == {os.getpid()}
     assert os.getpid() not in set(pool["pid"])  # the pool's workers drew them
     assert "detectability: 9/9 draws" in log.getvalue()
+    # the workflow's shards: every draw once, and sorted by seed the rows of one run
+    shards = [_confusion.run_draws(spaces, 3, seed=7, shard=(j, 4)) for j in range(4)]
+    assert [len(s) for s in shards] == [3, 2, 2, 2]
+    assert set(shards[0]["truth"]) == {"none", "strain_stiffening", "pre_tension"}  # mixed
+    merged = pd.concat(shards, ignore_index=True).sort_values("seed", ignore_index=True)
+    assert merged[cols].equals(one[cols])
+    with pytest.raises(ValueError, match="shard 4 of 4"):
+        _confusion.run_draws(spaces, 3, seed=7, shard=(4, 4))
 
 
 def test_confusion_draw_with_given_layers_extends_the_dermis_only_draw(monkeypatch):

@@ -314,10 +314,45 @@ if "diagnosis" in config:
             "results/tables/diagnosis_confusion_detectable.csv",
         ]
 
+        # the draws in shards of every n-th draw, one thread each: Snakemake packs them
+        # beside the other jobs (one two-core job ran alone at the study's end), a
+        # cluster runs them side by side; a process a draw would cost its start-up each
+        CONFUSION_SHARDS = int(DG["confusion"].get("shards", 5))
+
+        rule detectability_draws:
+            """Every n-th draw of the diagnosis over the physiological domain, from the j-th."""
+            input:
+                spaces=SF_SPACES,
+            output:
+                rows="results/diagnosis/confusion_draws/shard{shard}.csv",
+            wildcard_constraints:
+                shard="[0-9]+",
+            log:
+                "logs/diagnosis/detectability_draws/shard{shard}.log",
+            benchmark:
+                "results/benchmarks/diagnosis/detectability_draws/shard{shard}.tsv"
+            params:
+                per_cause=DG["confusion"]["per_cause"],
+                seed=DG["confusion"].get("seed", 1000),
+                shards=CONFUSION_SHARDS,
+                decision=DG.get("decision", {}),
+                fit=DG.get("fit", {}),
+                code=code_hash("evaluation", "diagnose", "identify", "model", *SPACE_CODE),
+            threads: 1
+            resources:
+                mem_mb=2000,
+                runtime=60,
+            conda:
+                "../envs/skinsuction.yaml"
+            script:
+                "../scripts/detectability_draws.py"
+
         rule detectability_map:
             """Diagnosis over the physiological domain: confusion matrix and detectability map."""
             input:
                 spaces=SF_SPACES,
+                rows=expand("results/diagnosis/confusion_draws/shard{shard}.csv",
+                            shard=range(CONFUSION_SHARDS)),
             output:
                 draws="results/diagnosis/confusion_draws.csv",
                 matrix=report(
@@ -336,23 +371,17 @@ if "diagnosis" in config:
                 pdf="results/figures/detectability_map.pdf",
             log:
                 "logs/diagnosis/detectability_map.log",
-            benchmark:
-                "results/benchmarks/diagnosis/detectability_map.tsv"
             params:
-                per_cause=DG["confusion"]["per_cause"],
-                seed=DG["confusion"].get("seed", 1000),
-                decision=DG.get("decision", {}),
-                fit=DG.get("fit", {}),
-                code=code_hash("evaluation", "diagnose", "identify", "model", "figures",
-                               *SPACE_CODE),
-            threads: 2
+                causes=[n for n in SF_MODELS if n != BASELINE],
+                code=code_hash("evaluation", "diagnose", "figures"),
+            threads: 1
             resources:
-                mem_mb=3000,
-                runtime=120,
+                mem_mb=2000,
+                runtime=10,
             conda:
                 "../envs/skinsuction.yaml"
             script:
-                "../scripts/detectability_map.py"
+                "../scripts/confusion_summary.py"
 
     if "published_ranges" in DG:
         # not in the default target: 955 FE mode-1 solves, 34 CPU-min, twice the rest of

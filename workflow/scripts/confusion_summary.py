@@ -1,4 +1,5 @@
-"""Rule confusion_given_layers: the draws' rows -> confusion matrix, rates, map."""
+"""Rules detectability_map and confusion_given_layers: the draws' rows (of single draws or
+shards) -> confusion matrix, rates, map."""
 
 from skinsuction.jobs import job, write_table
 
@@ -9,6 +10,8 @@ with job(snakemake.log[0]):
     from skinsuction.figures.detectability import plot_detectability
 
     rows = pd.concat([pd.read_csv(f) for f in snakemake.input.rows], ignore_index=True)
+    # shards hold every n-th draw: by seed, the order of one run (none, then each cause)
+    rows = rows.sort_values("seed", kind="stable", ignore_index=True)
     for col in ("cpu_seconds", "wall_seconds", "verdict", "detectable"):
         if col not in rows:  # no draw got that far (e.g. every FE run failed)
             rows[col] = float("nan")

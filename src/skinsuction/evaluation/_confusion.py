@@ -443,13 +443,16 @@ def _run_shared(job):
 
 
 def run_draws(spaces: dict, per_cause: int, seed: int = 1000, settings=None,
-              workers: int = 1, progress=None, domain=None, on_demand=None) -> pd.DataFrame:
+              workers: int = 1, progress=None, domain=None, on_demand=None,
+              shard: tuple = (0, 1)) -> pd.DataFrame:
     """``per_cause`` draws for ``none`` and every cause of ``spaces``: one row each.
 
     Seeds are ``seed + 100000 k + i`` for the k-th true cause (``none`` first), as in
     ``benchmarks/diagnose_confusion.py``.  Each draw depends on its seed only, so
     ``workers`` processes (forked: they share the spaces) give the same rows, in the
-    same order, as one.  ``progress``: a stream for a :class:`skinsuction.Progress`
+    same order, as one; and ``shard = (j, n)`` runs every n-th draw from the j-th (the
+    causes mixed, so shards cost alike): the n shards' rows, sorted by seed, are the
+    rows of one run.  ``progress``: a stream for a :class:`skinsuction.Progress`
     bar (a terminal) or periodic lines (a log).
     """
     from skinsuction._progress import Progress
@@ -460,6 +463,10 @@ def run_draws(spaces: dict, per_cause: int, seed: int = 1000, settings=None,
               and not (given and spaces[n].cause.keyword in given)]
     jobs = [(truth, seed + 100000 * k + i)
             for k, truth in enumerate([NONE, *causes]) for i in range(int(per_cause))]
+    index, count = (int(v) for v in shard)
+    if not 0 <= index < count:
+        raise ValueError(f"shard {index} of {count}: want 0 <= shard < count")
+    jobs = jobs[index::count]
     bar = Progress(len(jobs), "detectability", "draws", progress) if progress else None
     _SHARED.update(spaces=spaces, settings=settings, domain=domain, on_demand=on_demand)
     rows = []
