@@ -16,7 +16,13 @@ import pytest
 from skinsuction.cli import main
 from skinsuction.errors import InputError
 from skinsuction.evaluation import mode1_suction, mode2_suction, virtual_curve, write_time_csv
-from skinsuction.identify._time_fit import _grid_step, fit_data_of
+from skinsuction.identify._time_fit import (
+    TimeCurveModel,
+    _grid_step,
+    fit_data_of,
+    fit_time_model,
+    search_samples,
+)
 from skinsuction.identify._time_intervals import (
     _segments,
     decorrelate_low_rank,
@@ -184,6 +190,33 @@ def test_mode2_fe_curve_recovered_within_the_intervals(space, tmp_path):
     # as a recovery only
     assert abs(r.X1h / (X1D * RATIO) - 1) < 0.01
     assert r.r_parameters["mode2"]
+
+
+def test_the_search_on_a_fifth_of_the_samples_reaches_the_fit_of_them_all(space, tmp_path):
+    """The window focusing reads a subset of the samples (every 8th, and a geometric
+    ladder after each break of the suction); the model there is the model of the whole
+    curve (the suction is linear between breaks), and the polish on every sample ends
+    where the search over every sample ends."""
+    data = _virtual_file(tmp_path, mode1_suction(400.0, on_s=2.0, off_s=1.5, cycles=2),
+                         "mode1.csv")
+    fd = [fit_data_of(c) for c in data.curves]
+    sub = [search_samples(d) for d in fd]
+    for d, s in zip(fd, sub):
+        assert s.time_s.size < d.time_s.size / 3
+        assert np.isin(d.time_s[d.breaks], s.time_s).all()
+        assert np.isin(np.arange(d.time_s.size)[::8], np.searchsorted(d.time_s, s.time_s)).all()
+    rays = {d.probe_mm: space.probe(d.probe_mm).space for d in fd}
+    theta = np.array([[np.log10(X1D), np.log10(RATIO), np.log10(G), np.log10(TAU)],
+                      [np.log10(0.05), -3.0, 0.3, -1.5]])
+    whole, part = TimeCurveModel(rays, fd, 1)(theta), TimeCurveModel(rays, sub, 1)(theta)
+    for d, s, m_whole, m_part in zip(fd, sub, whole, part):
+        idx = np.searchsorted(d.time_s, s.time_s)
+        np.testing.assert_allclose(m_part, m_whole[:, idx], rtol=1e-12, atol=1e-15)
+    fits = [fit_time_model(rays, fd, terms=1, seed=0, repeats=1, search_stride=k,
+                           window_focusing_options=FAST_WF) for k in (1, 8)]
+    assert fits[1].wf["settings"]["search_points"] < sum(d.n for d in fd) / 3
+    assert fits[1].chi2 == pytest.approx(fits[0].chi2, rel=1e-6)
+    np.testing.assert_allclose(fits[1].theta, fits[0].theta, atol=2e-3)
 
 
 def test_an_elastic_curve_is_not_given_a_spectrum(space, tmp_path):

@@ -37,11 +37,12 @@ model error as a correlated (systematic) term along each curve.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ._engine import Chi2Objective, repeated_fit
+from ._window_focusing import IdentificationError
 from ._time_model import (
     ElasticRays,
     clean_pressure,
@@ -86,6 +87,12 @@ RELEASE_S = 0.1
 #: Window focusing of the time fits: the paper's N and Nb, a looser stop (in units
 #: of sqrt(chi^2 / n)) and fewer iterations: the polish finishes the job.
 TIME_WF = {"n_samples": 1000, "n_best": 20, "tolerance": 1e-4, "max_iter": 60}
+
+#: The window focusing of the time fits reads every ``stride``-th sample, and every
+#: sample a geometric ladder of offsets after each change of the suction's slope (the
+#: creep transients, 1 ms to 10 s, alike in log time): a fifth of a mode-1 curve's
+#: samples. The polish then runs on them all (:func:`search_samples`).
+TIME_SEARCH_STRIDE = 8
 
 #: The polish of the time fits: the objective's own Jacobian (forward differences in
 #: one vectorised call), a looser tolerance and fewer evaluations than the engine's
@@ -210,6 +217,48 @@ def time_fit_data(label, probe_mm, time_s, pressure_mbar, deflection_mm, phase, 
     p = np.asarray(pressure_mbar, dtype=float)
     return TimeFitData(label, float(probe_mm), t, p, d, sd, phase, sigma, scale, used,
                        pressure_breaks(t, p), tuple(notes), fractions, float(resolution_mm))
+
+
+def search_samples(d: TimeFitData, stride: int = TIME_SEARCH_STRIDE) -> TimeFitData:
+    """The curve ``d`` at the samples the window focusing reads.
+
+    Every ``stride``-th sample, every break of the suction's slope, and after each
+    break the samples at offsets 1, 2, 3, 4, 5, 8, 11, 15, ... (each about 1.4 times
+    the last): the fast transients stay dense, the slow ones and the elastic curve are
+    read every ``stride`` samples. The suction is linear between its breaks, so the
+    model at the kept samples is exactly the model of the whole curve there
+    (:func:`effective_pressures`); only the sum of squares has fewer terms.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(101) * 0.01
+    >>> p = np.where(t >= 0.2, 100.0, 0.0); p[20] = 50.0     # a step at 0.2 s
+    >>> d = time_fit_data("x", 2.0, t, p, 0.1 * p / 100, np.full(101, "on"), 0.003)
+    >>> s = search_samples(d, stride=10)
+    >>> s.time_s.size, [round(float(v), 2) for v in s.time_s[:12]]
+    (32, [0.0, 0.01, 0.02, 0.03, 0.04, 0.05, 0.08, 0.1, 0.11, 0.15, 0.19, 0.2])
+    >>> bool(np.all(np.isin(d.time_s[d.breaks], s.time_s)))
+    True
+    """
+    size = d.time_s.size
+    if stride <= 1 or size <= 2 * stride:
+        return d
+    breaks = d.breaks if d.breaks is not None else pressure_breaks(d.time_s, d.pressure_mbar)
+    ladder = np.unique(np.round(1.4 ** np.arange(int(np.log(size) / np.log(1.4)) + 2)))
+    keep = np.zeros(size, bool)
+    keep[::stride] = True
+    keep[[0, size - 1]] = True
+    ends = np.append(breaks[1:], size - 1)
+    for a, b in zip(breaks, ends):
+        offsets = ladder[ladder < min(b - a, 8 * stride)].astype(int)
+        keep[a] = True
+        keep[a + offsets] = True
+    idx = np.flatnonzero(keep)
+    return replace(d, time_s=d.time_s[idx], pressure_mbar=d.pressure_mbar[idx],
+                   deflection_mm=d.deflection_mm[idx], sd_mm=d.sd_mm[idx],
+                   phase=d.phase[idx], used=d.used[idx],
+                   breaks=np.searchsorted(idx, breaks).astype(int))
 
 
 def _grid_step(d) -> float:
@@ -424,7 +473,8 @@ def evaluate_time_fit(model: TimeCurveModel, theta, wf=None) -> TimeFit:
 
 def fit_time_model(rays: dict, data: list, *, terms: int = 1, seed=0, repeats: int = 2,
                    window_focusing_options: dict | None = None, starts=(),
-                   polish: bool = True, layers: bool = False) -> TimeFit:
+                   polish: bool = True, layers: bool = False,
+                   search_stride: int = TIME_SEARCH_STRIDE) -> TimeFit:
     """Fit the model with ``terms`` Prony terms (0: elastic) to the curves ``data``.
 
     Parameters
@@ -448,6 +498,9 @@ def fit_time_model(rays: dict, data: list, *, terms: int = 1, seed=0, repeats: i
         A spectrum per layer, one term each (``terms=1``): the per-layer fast path of
         :class:`TimeCurveModel`, an approximation whose error
         (:data:`MODEL_ERROR_LAYERS`) the data's sd must carry.
+    search_stride : int
+        The window focusing reads the samples of :func:`search_samples` with this
+        stride (1: every sample); the polish reads every sample.
 
     Returns
     -------
@@ -460,9 +513,27 @@ def fit_time_model(rays: dict, data: list, *, terms: int = 1, seed=0, repeats: i
     """
     model = TimeCurveModel(rays, data, terms, layers)
     wf = {**TIME_WF, **(window_focusing_options or {})}
-    fit = repeated_fit(TimeObjective(model), repeats=repeats, seed=seed, starts=starts,
+    error = ("no parameters of the space reproduce the time curves "
+             "(every candidate has no curve at the suction applied)")
+    search = model
+    if repeats > 0 and search_stride > 1:
+        search = TimeCurveModel(rays, [search_samples(d, search_stride) for d in data],
+                                terms, layers)
+    fit = repeated_fit(TimeObjective(search), repeats=repeats, seed=seed, starts=starts,
                        focus_options=wf, polish_best=2 if polish else 0,
-                       polish_options=TIME_POLISH,
-                       error_message="no parameters of the space reproduce the time curves "
-                                     "(every candidate has no curve at the suction applied)")
+                       polish_options=TIME_POLISH, error_message=error)
+    if search is not model:
+        # the estimate is the polish on every sample, from the search's best and the
+        # given starts (a nested model's fit stays within reach)
+        try:
+            final = repeated_fit(TimeObjective(model), repeats=0, starts=[fit.x, *starts],
+                                 polish_best=2 if polish else 0, polish_options=TIME_POLISH,
+                                 error_message=error)
+        except IdentificationError:  # no curve at a sample the search skipped: search all
+            return fit_time_model(rays, data, terms=terms, seed=seed, repeats=repeats,
+                                  window_focusing_options=window_focusing_options,
+                                  starts=starts, polish=polish, layers=layers, search_stride=1)
+        fit = replace(fit, x=final.x, cost=final.cost, polished=fit.polished + final.polished,
+                      settings={**fit.settings, "search_stride": int(search_stride),
+                                "search_points": sum(d.n for d in search.data)})
     return evaluate_time_fit(model, fit.x, fit.summary())
