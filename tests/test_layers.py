@@ -18,8 +18,8 @@ SRC = ROOT / "src"
 PACKAGE = SRC / "skinsuction"
 
 LAYERS = [
-    {"errors", "_files", "_threads", "_argtypes", "_progress", "provenance", "noise", "config",
-     "measured", "jobs", "results"},
+    {"errors", "_files", "_threads", "_memory", "_argtypes", "_progress", "provenance", "noise",
+     "config", "measured", "jobs", "results"},
     {"model"},
     {"viscoelastic"},
     {"space"},
