@@ -3,7 +3,7 @@
 The fits evaluate a thousand candidates at every sample of a time curve: arrays of
 tens of MB made and freed thousands of times. glibc's malloc serves such arrays by
 ``mmap`` and returns them on ``free``, so every new one faults its pages in afresh:
-a third of a time-curve diagnosis's CPU was the kernel's (89 of 335 s,
+a quarter of a time-curve diagnosis's CPU was the kernel's (101 of 371 s,
 ``docs/workflow.md``). Raising the thresholds keeps them in the heap, reused.
 """
 

@@ -166,7 +166,7 @@ def main(argv=None) -> int:
     from skinsuction.errors import InputError
     from skinsuction.measured import MeasuredDataError
 
-    keep_freed_memory()  # a third less CPU in the fits (docs/workflow.md)
+    keep_freed_memory()  # the fits' large arrays reused, not re-faulted (docs/workflow.md)
     try:
         return args.run(args)
     except CLIError as err:

@@ -51,6 +51,7 @@ RELEASE_S = 0.1
 #: samples. The polish then runs on them all (:func:`search_samples`).
 TIME_SEARCH_STRIDE = 8
 
+
 @dataclass(frozen=True)
 class TimeFitData:
     """One time curve as fitted: the cleaned suction, the deflections, the sd of each
