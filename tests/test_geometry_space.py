@@ -177,6 +177,25 @@ def test_assembling_names_the_rays_missing(fe_spaces, tmp_path):
     assert isinstance(frame, pd.DataFrame)
 
 
+def test_a_build_resumed_in_parts_assembles_alike_but_never_mixes_fe_code(fe_spaces, tmp_path):
+    from skinsuction.space._storage import _read_parquet, _write_parquet
+
+    tmp, coarse, _ = fe_spaces
+    frame, meta = _read_parquet(tmp / "coarse.parquet")
+    ids = frame["ray_id"].unique()
+    half = frame["ray_id"].isin(ids[: len(ids) // 2])
+    parts = [tmp_path / "a.parquet", tmp_path / "b.parquet"]
+    for part, rows, code in zip(parts, [half, ~half], ["1111", "1111"]):
+        _write_parquet(frame[rows], part, {**meta, "source_hash": {"model": code}})
+    grid = coarse.grid
+    again = assemble_geometry_space(parts, tmp_path / "again.parquet", SPEC, grid)
+    assert np.array_equal(again.deflection, coarse.deflection, equal_nan=True)
+    _write_parquet(frame[~half], parts[1], {**meta, "source_hash": {"model": "2222"}})
+    with pytest.raises(ValueError, match="different FE code or meshes.*b.parquet"):
+        assemble_geometry_space(parts, tmp_path / "mixed.parquet", SPEC, grid)
+    assert not (tmp_path / "mixed.parquet").exists()
+
+
 def test_a_geometry_space_serves_only_the_rays_it_was_solved_with(fe_spaces, tmp_path):
     tmp, _, _ = fe_spaces
     other = RaySpec([2, 6], [0.02, 0.2], load_max=10000, load_steps=5, x1d_ref=0.01,

@@ -22,6 +22,7 @@ specification the grid was not built with, is solved on demand
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from functools import lru_cache
@@ -317,13 +318,20 @@ def assemble_geometry_space(bundle_paths, out_path, spec: RaySpec, grid: Geometr
     Raises
     ------
     ValueError
-        Naming the rays missing or incomplete: a missing ray is never filled in.
+        Naming the rays missing or incomplete (a missing ray is never filled in),
+        or the bundle files solved by different FE code or meshes (a build
+        resumed or spread over machines must not mix them).
     """
-    frames, infos = [], {}
+    frames, infos, solved_by = [], {}, {}
     for p in bundle_paths:
         f, meta = _read_parquet(p)
         frames.append(f[["ray_id", "pressure_mbar", "deflection_mm"]])
         infos.update(meta.get("rays") or {})
+        solved_by.setdefault(_solver_key(meta), []).append(str(p))
+    if len(solved_by) > 1:
+        groups = "; ".join(f"{len(v)} file(s) such as {v[0]} with {k}" for k, v in solved_by.items())
+        raise ValueError(f"the bundle files were solved by different FE code or meshes: {groups}."
+                         " Rebuild the odd ones (delete them and rerun the workflow)")
     rows = pd.concat(frames, ignore_index=True).drop_duplicates(["ray_id", "pressure_mbar"])
     by_ray = {rid: g for rid, g in rows.groupby("ray_id", sort=False)}
     n_p = len(spec.pressures_mbar)
@@ -351,10 +359,18 @@ def assemble_geometry_space(bundle_paths, out_path, spec: RaySpec, grid: Geometr
             "mesh_fallback": {rid: i.get("mesh_fallback") for rid, i in zip(ids, info)
                               if i.get("mesh_fallback")},
             "cpu_s": round(sum(float(i.get("seconds") or 0.0) for i in info), 1),
+            "solved_by": json.loads(next(iter(solved_by))) if solved_by else None,
             "provenance": dict(provenance or {})}
     m = m.astype(np.float32).astype(float)  # as stored: 1e-7 of M, far below its errors
     _write_compact(m.reshape(-1), out_path, meta)
     return GeometrySpace(spec, grid, m, meta["provenance"], *_cause_of(meta))
+
+
+def _solver_key(meta: dict) -> str:
+    """What a bundle file's rays depend on besides their ids: the FE code's hash, the mesh
+    and its fallbacks, as a JSON key (an on-demand cache file records no hash: None)."""
+    keys = ("source_hash", "mesh", "mesh_fallback", "fallback_below_mbar")
+    return json.dumps({k: meta.get(k) for k in keys}, sort_keys=True, default=str)
 
 
 def _cause_of(meta: dict) -> tuple:
