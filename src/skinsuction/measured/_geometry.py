@@ -62,8 +62,16 @@ class Geometry:
         return out
 
     def shifted(self, key: str, delta: float) -> "Geometry":
-        """The same geometry with thickness ``key`` moved by ``delta`` mm."""
-        return replace(self, **{key: getattr(self, key) + delta})
+        """The same geometry with thickness ``key`` moved by ``delta`` mm, taken as exact.
+
+        A point of a sensitivity (the fit at ``t +- sd``): it keeps no sd, whose
+        brackets would be solved at ``t +- 2 sd`` and read by nothing (for a 0.41 mm
+        dermis under the 6 mm probe that was 127 of a ramp's 516 CPU-s).
+
+        >>> Geometry(1.3, 1.0, given=("t_d",), sd={"t_d": 0.1}).shifted("t_d", -0.1).sd
+        {}
+        """
+        return replace(self, sd={}, **{key: getattr(self, key) + delta})
 
     def to_dict(self) -> dict:
         return {"dermis_thickness_mm": self.t_d, "hypodermis_thickness_mm": self.t_h,
