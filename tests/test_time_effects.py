@@ -88,8 +88,22 @@ def test_fast_path_on_a_stiffening_skin_against_fe_time_solves(space, creep_and_
 
 def test_creep_and_stiffening_are_both_named_with_gains_and_intervals(space,
                                                                      creep_and_stiffening,
-                                                                     tmp_path):
+                                                                     tmp_path, monkeypatch):
+    import skinsuction.identify._time_correction as tc
+
+    solves, solve = [], tc.fe_time_curve
+    monkeypatch.setattr(tc, "fe_time_curve",
+                        lambda skin, d, mesh=None: solves.append(d.label) or solve(skin, d, mesh))
     r = diagnose_time_data(creep_and_stiffening, space, FAST)
+    # creep's fit is corrected in 2 steps of an FE solve per curve; a model adding an
+    # effect to a corrected one holds that one's correction for its first step: 1 solve
+    options = [o for s in r["steps"] for o in s["options"] if o["fast_path_chi2"] is not None]
+    warm = [o for o in options if o["fe_correction_from"]]
+    assert len(warm) == len(options) - 1 >= 2
+    assert all(set(o["fe_correction_from"].split("+")) < set(o["effects"]) for o in warm)
+    layer_fits = (r["creep_layers"].get("fe_correction") or {}).values()
+    per_layer = sum(bool(f.get("applied")) for f in layer_fits)
+    assert len(solves) == 2 * (2 + len(warm) + 2 * per_layer)
     assert r["effects"] == [VISCOELASTIC_CREEP, STIFF], r["summary"]
     assert r["cause"] == r["named"] == VISCOELASTIC_CREEP and r["verdict"] == "cause_found"
     steps = [s for s in r["steps"] if s["added"]]

@@ -180,7 +180,8 @@ class EffectFitter:
                                  repeats=self.settings.repeats, starts=starts[:2])
             data, correction = self.data, None
             if terms and self.settings.fe_correction:
-                fit, data, correction = self._corrected(fit, rays, cause, key)
+                fit, data, correction = self._corrected(fit, rays, cause, key,
+                                                        warm=self._corrected_parent(key))
             self._cache[key] = TimeModel(tuple(effects), fit, rays, float(fit.chi2),
                                          int(fit.n_params), int(fit.n_points), data,
                                          correction)
@@ -189,9 +190,20 @@ class EffectFitter:
             model = dataclasses.replace(model, effects=tuple(effects))
         return model
 
-    def _corrected(self, fit, rays, cause, key, data=None, layers=False):
-        """The fit corrected by FE time solves; the fast fit, said so, if one stops."""
-        from skinsuction.identify import fe_corrected_fit, time_fit_skin
+    def _corrected_parent(self, key):
+        """The most specific model nested in ``key`` corrected by FE time solves, or None."""
+        nested = [m for m in self._cache.values()
+                  if set(m.effects) < set(key) and (m.correction or {}).get("applied")]
+        return max(nested, key=lambda m: len(m.effects), default=None)
+
+    def _corrected(self, fit, rays, cause, key, data=None, layers=False, warm=None):
+        """The fit corrected by FE time solves; the fast fit, said so, if one stops.
+
+        ``warm``, a corrected model nested in this one: its fast-path error, measured
+        at a skin near this fit, is held for the first step (a fit without an FE
+        solve), so a model that adds an effect to a corrected one pays for one FE
+        solve per curve fewer."""
+        from skinsuction.identify import fe_corrected_fit, fit_time_model, time_fit_skin
 
         c = rays[self.probes[0]].cause if cause is not None else None
         geometry, bottom = self.prep["geometry"], self.prep["space"].bottom
@@ -200,10 +212,19 @@ class EffectFitter:
             return time_fit_skin(parameters, geometry, bottom, c)
 
         data = self.data if data is None else data
+        steps, fast_chi2 = int(self.settings.fe_correction), float(fit.chi2)
+        warm = warm if steps > 1 and warm is not None and warm.data is not None else None
         try:
-            return fe_corrected_fit(rays, data, fit, skin_of,
-                                    iterations=self.settings.fe_correction,
-                                    seed=self._seed_of(key), layers=layers)
+            if warm is not None:
+                fit = fit_time_model(rays, warm.data, terms=fit.terms, seed=self._seed_of(key),
+                                     repeats=0, starts=[fit.theta], layers=layers)
+            fit, corrected, record = fe_corrected_fit(
+                rays, data, fit, skin_of, iterations=steps - (warm is not None),
+                seed=self._seed_of(key), layers=layers)
+            if warm is not None:
+                record = {**record, "iterations": steps, "warm_start": warm.name,
+                          "chi2": [fast_chi2, *record["chi2"]]}
+            return fit, corrected, record
         except RuntimeError as err:
             note = (f"{model_name(key)}{' (a spectrum per layer)' if layers else ''}: the FE "
                     f"correction stopped ({err}); the fit is the fast path's, with its model "
@@ -236,7 +257,8 @@ def _option(model: TimeModel, parent: TimeModel, settings) -> dict:
     return {"model": model.name, "effects": list(model.effects), "chi2": model.chi2,
             "bic": model.bic, "delta_bic": float(d), "delta_chi2": model.chi2 - parent.chi2,
             "decisive": bool(d <= settings.delta_bic and parent.misfit_p < settings.alpha),
-            "fast_path_chi2": corr["chi2"][0] if corr.get("applied") else None}
+            "fast_path_chi2": corr["chi2"][0] if corr.get("applied") else None,
+            "fe_correction_from": corr.get("warm_start")}
 
 
 def select_effects(fitter: EffectFitter, settings) -> dict:
