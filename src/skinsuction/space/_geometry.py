@@ -1,20 +1,14 @@
 """Every probe and the subject's own layers: the spaces of one measurement.
 
-The scale-free space holds rays of the Cutometer probes (2, 4, 6 and 8 mm) for
-the paper's layers (dermis and hypodermis 1 mm each).  A measurement with another
-aperture, or with its own layer thicknesses (ultrasound, OCT), gets its
-neo-Hookean rays solved on demand at exactly that geometry
-(:class:`skinsuction.space.OnDemandRays`, :mod:`._on_demand`).  Interpolating a
-precomputed grid over the geometry instead was measured and rejected: under a
-soft hypodermis the deflection changes fourfold between t_d/a = 0.2 and 0.55,
-and cubic interpolation on nodes 1.3 apart in t_d/a still missed direct runs by
-up to 1.1 % (median 0.3 %), where the space must stay within 0.2 %
-(docs/geometry.md).
+The scale-free space holds rays of the Cutometer probes (2, 4, 6 and 8 mm) for the
+paper's layers (1 mm each).  A measurement with another aperture, or its own layer
+thicknesses (ultrasound, OCT), gets its neo-Hookean rays from
+:class:`skinsuction.space.OnDemandRays`: read off the geometry space where its error
+estimate allows, solved by FE elsewhere (docs/geometry.md).
 
-The causes get their own rays at that geometry too, solved on demand
-(:func:`spaces_at`); a diagnosis asks only for the X1h/X1d nodes in a window
-around its neo-Hookean fit and widens it where a cause's fit reaches its edge
-(``ratio_window``, :func:`window_nodes`).  Without a solver a cause's effect on
+The causes get their rays at that geometry too (:func:`spaces_at`): off their own
+geometry spaces or solved, only the X1h/X1d nodes in a window around the neo-Hookean
+fit (``ratio_window``, :func:`window_nodes`).  Without a solver a cause's effect on
 log M is carried over from the probes and layers it was simulated for, an
 approximation the notes name.  A given thickness with an sd becomes a nuisance
 parameter of every fit (:class:`ThicknessNuisance`).
@@ -450,7 +444,7 @@ def _attach_nuisances(out: dict, own_brackets: set, at: _Measurement) -> None:
             space.nuisance = _nuisances(space, at, [], at.base.spec.ratio_nodes)
     if nuisance and own_brackets:
         at.notes.append(f"{', '.join(sorted(own_brackets))}: the thickness nuisance moves each "
-                        "cause's curve by its own rays at ±1 sd (solved on demand)")
+                        "cause's curve by its own rays at ±1 sd (read or solved)")
 
 
 def _subset(nodes, full) -> dict:
@@ -481,10 +475,12 @@ def _nuisances(center, at: _Measurement, notes, full_nodes=()) -> tuple:
             t = max(_round_mm(t), THICKNESS_RESOLUTION_MM)
             other = {**layers, AXIS_PATHS[key]: t}
             rays = {}
-            for p in probes:
-                rays[p], info = on_demand.rays(p, other, cause,
-                                               **_subset(center.spec.ratio_nodes, full_nodes),
-                                               **at.reach(p))
+            for p in probes:  # a stand-in for the FE (tests) solves every bracket
+                kw = {**_subset(center.spec.ratio_nodes, full_nodes), **at.reach(p)}
+                rays[p], info = (on_demand.moved_rays(p, layers, other, at.cut(center.rays(p)),
+                                                      cause, **kw)
+                                 if isinstance(on_demand, OnDemandRays)
+                                 else on_demand.rays(p, other, cause, **kw))
                 if not info.get("rays_interpolated", 0):  # solved whole, or read from the cache
                     info = {**info, "rays_solved": info.get("rays", 0)}
                 for k in total:
