@@ -10,8 +10,8 @@ import pytest
 
 from skinsuction.diagnose import Settings
 from skinsuction.diagnose._time import VISCOELASTIC_CREEP, diagnose_time_data, write_time_report
-from skinsuction.diagnose._time_effects import (CREEP_SECOND_TERM, TimeModel, cycle_pattern,
-                                                select_effects)
+from skinsuction.diagnose._time_effects import CREEP_SECOND_TERM, TimeModel, select_effects
+from skinsuction.diagnose._time_layers import cycle_pattern
 from skinsuction.evaluation import mode1_suction, virtual_skin_curve, write_time_csv
 from skinsuction.identify import TimeCurveModel
 from skinsuction.identify.time_curves import prepare_time_fit

@@ -48,7 +48,8 @@ from ._fit import (Fit, FitData, ModelCurves, fit_intervals, fit_model, nested_s
 from ._report import write_report
 from ._stats import bic, misfit_test, noise_from_differences, noise_from_replicates
 from ._time import VISCOELASTIC_CREEP, diagnose_time_data, diagnose_time_file, write_time_report
-from ._time_effects import CREEP_SECOND_TERM, EffectFitter, layer_test, select_effects
+from ._time_effects import CREEP_SECOND_TERM, EffectFitter, select_effects
+from ._time_layers import layer_test
 
 __all__ = [
     "BASELINE", "NONE", "Cause", "DEFAULT_CAUSES", "default_registry", "registry_from_config",

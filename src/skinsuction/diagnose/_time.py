@@ -221,7 +221,8 @@ def _select(data, prep, settings) -> _Run:
     elastic effect dropped when a spectrum per layer explains it."""
     from skinsuction.identify import IdentificationError
 
-    from ._time_effects import EffectFitter, layer_test, select_effects
+    from ._time_effects import EffectFitter, select_effects
+    from ._time_layers import layer_test
 
     try:
         fitter = EffectFitter(prep, settings, _causes_tried(prep["space"], settings))
@@ -247,7 +248,8 @@ def _select(data, prep, settings) -> _Run:
 
 def _judge(run: _Run, fd, settings, warnings) -> dict:
     """The verdict, the edges, what is left unexplained, and the warnings."""
-    from ._time_effects import cycle_pattern, physical_effects
+    from ._time_effects import physical_effects
+    from ._time_layers import cycle_pattern
 
     base, visco, final = run.base, run.visco, run.final
     el, ve = _fit_json(base.fit, fd, "elastic"), _fit_json(visco.fit, fd, VISCOELASTIC_CREEP)
