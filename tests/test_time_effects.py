@@ -10,7 +10,8 @@ import pytest
 
 from skinsuction.diagnose import Settings
 from skinsuction.diagnose._time import VISCOELASTIC_CREEP, diagnose_time_data, write_time_report
-from skinsuction.diagnose._time_effects import CREEP_SECOND_TERM, TimeModel, select_effects
+from skinsuction.diagnose._time_effects import (CREEP_SECOND_TERM, FINISH_MARGIN_BIC, TimeModel,
+                                                select_effects)
 from skinsuction.diagnose._time_layers import cycle_pattern
 from skinsuction.evaluation import mode1_suction, virtual_skin_curve, write_time_csv
 from skinsuction.identify import TimeCurveModel
@@ -96,14 +97,23 @@ def test_creep_and_stiffening_are_both_named_with_gains_and_intervals(space,
                         lambda skin, d, mesh=None: solves.append(d.label) or solve(skin, d, mesh))
     r = diagnose_time_data(creep_and_stiffening, space, FAST)
     # creep's fit is corrected in 2 steps of an FE solve per curve; a model adding an
-    # effect to a corrected one holds that one's correction for its first step: 1 solve
+    # effect to a corrected one holds that one's correction for its first step: 1 solve,
+    # and none where its BIC is too far from the choice to matter (held)
     options = [o for s in r["steps"] for o in s["options"] if o["fast_path_chi2"] is not None]
     warm = [o for o in options if o["fe_correction_from"]]
     assert len(warm) == len(options) - 1 >= 2
     assert all(set(o["fe_correction_from"].split("+")) < set(o["effects"]) for o in warm)
+    for s in r["steps"]:
+        best = min(o["bic"] for o in s["options"])
+        for o in s["options"]:
+            if o["fe_correction_held"]:
+                assert o["bic"] - best >= FINISH_MARGIN_BIC and not o["decisive"]
+                assert o["delta_bic"] > FAST.delta_bic + FINISH_MARGIN_BIC
+    finished = [o for o in warm if not o["fe_correction_held"]]
+    assert 1 <= len(finished) < len(warm)
     layer_fits = (r["creep_layers"].get("fe_correction") or {}).values()
     per_layer = sum(bool(f.get("applied")) for f in layer_fits)
-    assert len(solves) == 2 * (2 + len(warm) + 2 * per_layer)
+    assert len(solves) == 2 * (2 + len(finished) + 2 * per_layer)
     assert r["effects"] == [VISCOELASTIC_CREEP, STIFF], r["summary"]
     assert r["cause"] == r["named"] == VISCOELASTIC_CREEP and r["verdict"] == "cause_found"
     steps = [s for s in r["steps"] if s["added"]]
@@ -165,7 +175,7 @@ class _Stub:
     def addable(self, effects):
         return [e for e in ("A", "B", "C") if e not in effects]
 
-    def fit(self, effects):
+    def fit(self, effects, finish=True):  # no FE correction: nothing is held
         key = frozenset(effects)
         self.fitted.append(key)
         return TimeModel(tuple(effects), None, None, self.chi2[key], 2 + 2 * len(effects),
