@@ -179,8 +179,6 @@ class EffectFitter:
         from skinsuction.identify import fit_time_model
 
         key = tuple(sorted(effects, key=lambda e: (e != VISCOELASTIC_CREEP, e)))
-        if finish and key in self._cache and self._cache[key].held:
-            self._cache[key] = self._finish(self._cache[key], key)
         if key not in self._cache:
             cause, terms = _elastic(key), _terms(key)
             rays = self.rays[cause]
@@ -192,11 +190,12 @@ class EffectFitter:
             data, correction = self.data, None
             if terms and self.settings.fe_correction:
                 fit, data, correction = self._corrected(fit, rays, cause, key,
-                                                        warm=self._corrected_parent(key),
-                                                        held_only=not finish)
+                                                        warm=self._corrected_parent(key))
             self._cache[key] = TimeModel(tuple(effects), fit, rays, float(fit.chi2),
                                          int(fit.n_params), int(fit.n_points), data,
                                          correction)
+        if finish and self._cache[key].held:
+            self._cache[key] = self._finish(self._cache[key], key)
         model = self._cache[key]
         if model.effects != tuple(effects):  # the same fit, named in this order
             model = dataclasses.replace(model, effects=tuple(effects))
@@ -234,14 +233,13 @@ class EffectFitter:
         geometry, bottom = self.prep["geometry"], self.prep["space"].bottom
         return lambda parameters: time_fit_skin(parameters, geometry, bottom, c)
 
-    def _corrected(self, fit, rays, cause, key, data=None, layers=False, warm=None,
-                   held_only=False):
+    def _corrected(self, fit, rays, cause, key, data=None, layers=False, warm=None):
         """The fit corrected by FE time solves; the fast fit, said so, if one stops.
 
         ``warm``, a corrected model nested in this one: its fast-path error, measured
         at a skin near this fit, is held for the first step (a fit without an FE
         solve), so a model that adds an effect to a corrected one pays for one FE
-        solve per curve fewer; ``held_only`` stops there (:meth:`_finish` goes on)."""
+        solve per curve fewer: it returns that held step, :meth:`_finish` goes on."""
         from skinsuction.identify import fe_corrected_fit, fit_time_model
 
         skin_of = self._skin_of(rays, cause)
@@ -252,17 +250,10 @@ class EffectFitter:
             if warm is not None:
                 fit = fit_time_model(rays, warm.data, terms=fit.terms, seed=self._seed_of(key),
                                      repeats=0, starts=[fit.theta], layers=layers)
-                if held_only:
-                    return fit, warm.data, {"applied": True, "held": True,
-                                            "warm_start": warm.name,
-                                            "chi2": [fast_chi2, float(fit.chi2)]}
-            fit, corrected, record = fe_corrected_fit(
-                rays, data, fit, skin_of, iterations=steps - (warm is not None),
-                seed=self._seed_of(key), layers=layers)
-            if warm is not None:
-                record = {**record, "iterations": steps, "warm_start": warm.name,
-                          "chi2": [fast_chi2, *record["chi2"]]}
-            return fit, corrected, record
+                return fit, warm.data, {"applied": True, "held": True, "warm_start": warm.name,
+                                        "chi2": [fast_chi2, float(fit.chi2)]}
+            return fe_corrected_fit(rays, data, fit, skin_of, iterations=steps,
+                                    seed=self._seed_of(key), layers=layers)
         except RuntimeError as err:
             note = (f"{model_name(key)}{' (a spectrum per layer)' if layers else ''}: the FE "
                     f"correction stopped ({err}); the fit is the fast path's, with its model "
