@@ -6,11 +6,12 @@ Every mode-1 fit is corrected by FE time solves at the fit
 (:func:`skinsuction.identify.fe_corrected_fit`, two per curve by default). A
 Cutometer samples at 100 Hz: a step at every sample is 1 000 steps for 10 s. The
 suction is linear between the breaks of its slope, so steps graded from each
-break (1 ms, growing by 1.25, at most 0.1 s) follow the same load path; the
-samples are then read by PCHIP between breaks. For skins of the layers study and
-the published face values (creep with and without stiffening; 2 and 8 mm probes;
-mode 1, 3 s on / 2 s off, 2 cycles), prints the steps, the CPU of each solve
-and the largest difference at the samples. Asserts nothing.
+break (1 ms, growing by 1.5, at most 0.15 s; before 29 November 2026 by 1.25 to
+0.1 s) follow the same load path; the samples are then read by PCHIP between
+breaks. For skins of the layers study and the published face values (creep with
+and without stiffening; 2 and 8 mm probes; mode 1, 3 s on / 2 s off, 2 cycles),
+prints the steps, the CPU of each solve and the largest difference at the
+samples, for both gradings. Asserts nothing.
 """
 
 from __future__ import annotations
@@ -29,6 +30,9 @@ SKINS = {  # name: (X1d, X1h, X2d MPa, g, tau s, probe mm, suction mbar)
     "8 mm, strong creep + stiffening": (0.046, 1.15e-3, 0.367, [0.73], [0.76], 8.0, 400.0),
 }
 
+#: The grading before 29 November 2026: (first step s, growth, largest step s).
+PREVIOUS_GRADING = (1e-3, 1.25, 0.1)
+
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -37,7 +41,10 @@ def main(argv=None):
 
     from skinsuction.evaluation import mode1_suction, virtual_skin_curve, write_time_csv
     from skinsuction.identify._time_correction import (
+        FIRST_STEP_S,
         GRADED_STEPS_S,
+        MAX_STEP_S,
+        STEP_GROWTH,
         fe_time_curve,
         solve_times,
     )
@@ -47,11 +54,23 @@ def main(argv=None):
     from skinsuction.space import load_space
     from skinsuction.viscoelastic import Prony
 
+    import skinsuction.viscoelastic as ve
+
+    solve, newton = ve.simulate_history, []
+
+    def counted(*args, **kwargs):  # the Newton iterations of each solve
+        h = solve(*args, **kwargs)
+        newton.append(h.newton_iterations)
+        return h
+
+    ve.simulate_history = counted
     space = load_space()
     print(f"mode 1, 3 s on / 2 s off, 2 cycles, {args.rate_hz:g} Hz; reference mesh")
-    print("| skin | probe | steps: samples / graded | CPU-s: samples / graded | "
-          "max |graded - samples| (µm) | Uf (µm) |")
-    print("|---|---|---|---|---|---|")
+    gradings = {"graded": (FIRST_STEP_S, STEP_GROWTH, MAX_STEP_S),
+                "before": PREVIOUS_GRADING}
+    print("| skin | probe | steps: samples / graded / before | Newton iterations | CPU-s | "
+          "max |graded - samples| (µm): graded / before | Uf (µm) |")
+    print("|---|---|---|---|---|---|---|")
     for name, (x1d, x1h, x2d, g, tau, probe, level) in SKINS.items():
         skin = Skin.two_layer(x1d, x1h, x2d=x2d, spectrum=Prony(g, tau))
         t, p, _, exact, _ = virtual_skin_curve(skin, mode1_suction(level), probe_mm=probe,
@@ -60,19 +79,23 @@ def main(argv=None):
         with tempfile.TemporaryDirectory() as tmp:
             path = write_time_csv(Path(tmp) / "c.csv", [(probe, t, p, exact)], [name])
             d = prepare_time_fit(load_time_curves(path), space, noise_um=3.0)["data"][0]
-        out = {}
-        for steps in ("samples", "graded"):
+        newton.clear()
+        c0 = time.process_time()
+        ref = fe_time_curve(skin, d, steps="samples")
+        cpu, n, diff = [time.process_time() - c0], [], []
+        for grading in gradings.values():
             c0 = time.process_time()
-            out[steps] = fe_time_curve(skin, d, steps=steps)
-            out[f"{steps}_cpu"] = time.process_time() - c0
-        n_graded = solve_times(d.time_s, d.breaks).size
+            m = fe_time_curve(skin, d, steps="graded", grading=grading)
+            cpu.append(time.process_time() - c0)
+            n.append(solve_times(d.time_s, d.breaks, grading).size)
+            diff.append(1e3 * np.abs(m - ref).max())
         fine = (d.time_s[d.breaks][:, None] + GRADED_STEPS_S[None, :]).ravel()
         n_samples = np.unique(np.round(np.concatenate(
             [d.time_s, fine[fine < d.time_s[-1]]]), 9)).size
-        diff = 1e3 * np.abs(out["graded"] - out["samples"]).max()
-        print(f"| {name} | {probe:g} mm | {n_samples} / {n_graded} | "
-              f"{out['samples_cpu']:.1f} / {out['graded_cpu']:.1f} | {diff:.3f} | "
-              f"{1e3 * out['samples'].max():.0f} |")
+        print(f"| {name} | {probe:g} mm | {n_samples} / {n[0]} / {n[1]} | "
+              f"{' / '.join(map(str, newton))} | "
+              f"{cpu[0]:.1f} / {cpu[1]:.1f} / {cpu[2]:.1f} | {diff[0]:.3f} / {diff[1]:.3f} | "
+              f"{1e3 * ref.max():.0f} |")
     return 0
 
 

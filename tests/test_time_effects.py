@@ -10,8 +10,8 @@ import pytest
 
 from skinsuction.diagnose import Settings
 from skinsuction.diagnose._time import VISCOELASTIC_CREEP, diagnose_time_data, write_time_report
-from skinsuction.diagnose._time_effects import (CREEP_SECOND_TERM, FINISH_MARGIN_BIC, TimeModel,
-                                                select_effects)
+from skinsuction.diagnose._time_effects import (CREEP_SECOND_TERM, FINISH_MARGIN_BIC,
+                                                EffectFitter, TimeModel, select_effects)
 from skinsuction.diagnose._time_layers import cycle_pattern
 from skinsuction.evaluation import mode1_suction, virtual_skin_curve, write_time_csv
 from skinsuction.identify import TimeCurveModel
@@ -312,6 +312,48 @@ def test_a_study_names_both_effects_of_a_mode1_file(creep_and_stiffening, tmp_pa
     assert row["effects"] == f"{VISCOELASTIC_CREEP},{STIFF}", row["warnings"]
     assert row["cause"] == VISCOELASTIC_CREEP and row["extra_parameter"] == "X2d"
     assert row["extra_lower"] <= 0.5 <= row["extra_upper"]
+
+
+def test_a_diagnosis_takes_the_identifications_creep_fit(space, creep_and_stiffening,
+                                                        monkeypatch):
+    """A study identifies then diagnoses each curve: the diagnosis's creep model is the
+    identification's FE-corrected fit (two FE time solves per curve fewer), so its
+    creep parameters are the identification's; the effects named are the same as a
+    diagnosis fitting creep itself (test above: creep and stiffening, X2d's interval
+    over the truth); a fit of other weights is not taken."""
+    import dataclasses
+
+    import skinsuction.identify._time_correction as tc
+    from skinsuction.identify.time_curves import identify_time_data
+
+    ident = identify_time_data(creep_and_stiffening, space, repeats=1, seed=0)
+    assert ident.fitted.fits(prepare_time_fit(creep_and_stiffening, space)["data"], 1, 2,
+                             geometry=ident.fitted.geometry)
+    assert "fitted" not in ident.to_json()
+    solves, solve = [], tc.fe_time_curve
+    monkeypatch.setattr(tc, "fe_time_curve",
+                        lambda skin, d, mesh=None: solves.append(d.label) or solve(skin, d, mesh))
+    r = diagnose_time_data(creep_and_stiffening, space, FAST, creep=ident.fitted)
+    creep = r["viscoelastic"]
+    assert creep["fe_correction"]["reused"] and creep["chi2"] == pytest.approx(
+        ident.fit_quality["chi2"])
+    assert creep["parameters"]["g"] == pytest.approx(ident.g)
+    options = [o for s in r["steps"] for o in s["options"] if o["fast_path_chi2"] is not None]
+    finished = [o for o in options if o["fe_correction_from"] and not o["fe_correction_held"]]
+    layer_fits = (r["creep_layers"].get("fe_correction") or {}).values()
+    per_layer = sum(bool(f.get("applied")) for f in layer_fits)
+    assert len(solves) == 2 * (len(finished) + 2 * per_layer)  # none for creep's own fit
+    assert r["effects"] == [VISCOELASTIC_CREEP, STIFF], r["summary"]
+    iv = r["final"]["intervals"]["X2d"]
+    assert iv["lower"] <= 0.5 <= iv["upper"]
+    # another noise (other weights) or other steps: not the same fit, creep is fitted
+    other = dataclasses.replace(FAST, noise_um=7.0)
+    for settings in (other, dataclasses.replace(FAST, fe_correction=1)):
+        prep = prepare_time_fit(creep_and_stiffening, space, noise_um=settings.noise_um)
+        fitter = EffectFitter(prep, settings, [], creep=ident.fitted)
+        assert not fitter._cache
+    assert EffectFitter(prepare_time_fit(creep_and_stiffening, space), FAST, [],
+                        creep=ident.fitted)._cache
 
 
 def test_a_stopped_fe_correction_keeps_the_fast_fit_and_says_so(space, tmp_path, monkeypatch):

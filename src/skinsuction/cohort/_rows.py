@@ -262,7 +262,9 @@ def _analyse_time(row, entry, ctx, seed, t0):
         from skinsuction.diagnose import diagnose_time_data
 
         try:
-            diag = diagnose_time_data(data, ctx["space"], _seeded(ctx["settings"], seed))
+            # the identification's creep fit is the diagnosis's creep model
+            diag = diagnose_time_data(data, ctx["space"], _seeded(ctx["settings"], seed),
+                                      creep=ident.fitted)
             row.update(_time_diagnosis_columns(diag))
         except ValueError as err:
             warnings.append(f"diagnosis failed: {' '.join(str(err).split())}")

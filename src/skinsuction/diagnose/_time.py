@@ -152,7 +152,7 @@ def _model_json(m, fd, prep, settings, rays_cause) -> dict:
 
 
 def diagnose_time_data(data, space, settings: Settings | None = None, *, thickness=None,
-                       probes=None, curve=None) -> dict:
+                       probes=None, curve=None, creep=None) -> dict:
     """Diagnose loaded time curves (:class:`skinsuction.measured.MeasuredTimeData`).
 
     The model is built effect by effect (:func:`._time_effects.select_effects`):
@@ -170,6 +170,12 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
         ``noise_um``, ``level``, ``time_causes`` are used.
     thickness : dict, optional
         Layer thicknesses overriding the file's header.
+    creep : FittedTimeModel, optional
+        A fit of one Prony term to the same curves, FE-corrected as the settings ask
+        (:attr:`TimeIdentification.fitted <skinsuction.identify.TimeIdentification>`
+        of the same file): taken as the creep model instead of fitting it again (a
+        study identifies and diagnoses each curve: two FE time solves fewer).  Where
+        it was fitted to other points, weights or steps, it is not used.
 
     Returns
     -------
@@ -191,7 +197,7 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
     settings = settings or Settings()
     prep = prepare_time_fit(data, space, probes=probes, curve=curve,
                             noise_um=settings.noise_um, thickness=thickness)
-    run = _select(data, prep, settings)
+    run = _select(data, prep, settings, creep)
     judged = _judge(run, prep["data"], settings, list(prep["warnings"]))
     report = _assemble(data, prep, settings, run, judged)
     report["summary"] = time_summary_text(report)
@@ -216,7 +222,7 @@ class _Run:
         return self._json[m.name]
 
 
-def _select(data, prep, settings) -> _Run:
+def _select(data, prep, settings, creep=None) -> _Run:
     """The effects (:func:`select_effects`), creep alone, which layer creeps, and an
     elastic effect dropped when a spectrum per layer explains it."""
     from skinsuction.identify import IdentificationError
@@ -225,7 +231,8 @@ def _select(data, prep, settings) -> _Run:
     from ._time_layers import layer_test
 
     try:
-        fitter = EffectFitter(prep, settings, _causes_tried(prep["space"], settings))
+        fitter = EffectFitter(prep, settings, _causes_tried(prep["space"], settings),
+                              creep=creep)
         sel = select_effects(fitter, settings)
         visco = fitter.fit((VISCOELASTIC_CREEP,))
     except IdentificationError as err:

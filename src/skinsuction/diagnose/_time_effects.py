@@ -127,13 +127,17 @@ class EffectFitter:
     settings : Settings
     causes : list of str
         The elastic causes tried (their rays: ``prep["space"].cause_rays``).
+    creep : FittedTimeModel, optional
+        Creep alone, fitted already (the identification's): the model of
+        ``(viscoelastic_creep,)`` where it was fitted to these curves with the
+        settings' FE steps (``reused`` in its correction record).
 
     With ``settings.fe_correction`` steps, every fit with creep is corrected by FE
     time solves at the fit (:func:`skinsuction.identify.fe_corrected_fit`); an
     elastic fit needs none (the fast path is then the rays themselves).
     """
 
-    def __init__(self, prep: dict, settings, causes):
+    def __init__(self, prep: dict, settings, causes, creep=None):
         self.prep, self.settings = prep, settings
         self.data = prep["data"]
         self.probes = sorted(prep["rays"])
@@ -151,6 +155,13 @@ class EffectFitter:
                 self.rays[name] = rays
         self.causes = [c for c in causes if c in self.rays]
         self._cache = {}
+        if creep is not None and creep.fits(self.data, 1, int(settings.fe_correction),
+                                            geometry=prep["geometry"]):
+            fit = creep.fit
+            self._cache[(VISCOELASTIC_CREEP,)] = TimeModel(
+                (VISCOELASTIC_CREEP,), fit, self.rays[None], float(fit.chi2),
+                int(fit.n_params), int(fit.n_points), list(creep.data),
+                {**creep.correction, "reused": True})
 
     def addable(self, effects) -> list:
         """The effects one step may add to ``effects`` (one elastic cause at most; the

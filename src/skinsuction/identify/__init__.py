@@ -72,7 +72,7 @@ from ._surrogate import (
     surrogate_deflection,
     write_surrogate_space,
 )
-from ._time_correction import fe_corrected_fit, fe_time_curve, time_fit_skin
+from ._time_correction import FittedTimeModel, fe_corrected_fit, fe_time_curve, time_fit_skin
 from ._time_fit import (MODEL_ERROR_LAYERS, RELEASE_S, TimeCurveModel, TimeFit, TimeFitData,
                         evaluate_time_fit, fit_data_of, fit_time_model, time_fit_data)
 from ._time_intervals import laplace_intervals, time_bound_flags
@@ -107,6 +107,7 @@ __all__ = [
     "TimeFitData",
     "fit_time_model",
     "fe_corrected_fit",
+    "FittedTimeModel",
     "fe_time_curve",
     "time_fit_skin",
     "TimeCurveModel",

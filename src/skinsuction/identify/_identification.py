@@ -26,7 +26,7 @@ Examples
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import ClassVar
 
@@ -52,7 +52,8 @@ class _JsonView:
             NaN (the writer makes them null).
         """
         head = {} if self.KIND is None else {"kind": self.KIND}
-        return {**head, **{f.name: getattr(self, f.name) for f in fields(self)}}
+        return {**head, **{f.name: getattr(self, f.name) for f in fields(self)
+                           if f.metadata.get("json", True)}}
 
     # the mapping view of the JSON, for callers written for the dict result
     def __getitem__(self, key: str):
@@ -202,6 +203,11 @@ class TimeIdentification(_JsonView):
     skin : dict or None
         The fitted skin (:meth:`skinsuction.model.Skin.to_dict`): the long-time
         moduli and the spectrum (on both layers) on the layers the fit assumed.
+    fitted : FittedTimeModel or None
+        The fit itself, with the data it was fitted to (not in the JSON): a
+        diagnosis of the same curves takes it as its creep model
+        (:func:`skinsuction.diagnose.diagnose_time_data`, ``creep``) instead of
+        fitting and FE-correcting it again.
     """
 
     KIND: ClassVar[str] = "time curves"
@@ -230,6 +236,7 @@ class TimeIdentification(_JsonView):
     provenance: dict
     warnings: list
     skin: dict | None = None
+    fitted: object = field(default=None, repr=False, metadata={"json": False})
 
     @property
     def kind(self) -> str:

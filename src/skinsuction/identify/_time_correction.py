@@ -22,23 +22,67 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["time_fit_skin", "fe_time_curve", "fe_corrected_fit"]
+__all__ = ["time_fit_skin", "fe_time_curve", "fe_corrected_fit", "FittedTimeModel"]
 
 #: Steps after each switch of the suction (s): 1 ms doubling, as the virtual experiments.
 GRADED_STEPS_S = 1e-3 * 2.0 ** np.arange(6)
 
 #: The graded steps of :func:`fe_time_curve`: 1 ms after each break of the suction's
-#: slope, growing by 1.25 to at most 0.1 s.  Between breaks the suction is linear, so
-#: the load path is the samples' own; a mode-1 curve of 10.5 s at 100 Hz takes 215
-#: steps instead of about 1 100, 2.1-2.7 times less CPU, and differs from the solve at
-#: every sample by at most 0.05 µm (benchmarks/time_correction_steps.py).
-FIRST_STEP_S, STEP_GROWTH, MAX_STEP_S = 1e-3, 1.25, 0.1
+#: slope, growing by 1.5 to at most 0.15 s.  Between breaks the suction is linear, so
+#: the load path is the samples' own; a mode-1 curve of 10.5 s at 100 Hz takes 145
+#: steps instead of about 1 100, and differs from the solve at every sample by at most
+#: 0.12 µm, a twenty-fifth of a Cutometer's 3 µm quantisation noise
+#: (benchmarks/time_correction_steps.py; growing by 1.25 to 0.1 s, 215 steps, 0.05 µm).
+FIRST_STEP_S, STEP_GROWTH, MAX_STEP_S = 1e-3, 1.5, 0.15
 
 
-def solve_times(time_s, breaks) -> np.ndarray:
+class FittedTimeModel(NamedTuple):
+    """A time fit with what it was fitted to, for a later fit of the same curves to reuse.
+
+    ``fit`` (TimeFit), ``data`` (the curves less the fast path's error, as
+    :func:`fe_corrected_fit` returns them, or the curves), ``correction`` (its record),
+    ``fitted_to`` (the measured curves, TimeFitData), ``geometry`` (the layers the
+    rays were read at) and ``effect`` (the elastic cause fitted with the spectrum, or
+    None).
+    """
+
+    fit: object
+    data: list
+    correction: dict
+    fitted_to: tuple
+    geometry: object = None
+    effect: str | None = None
+
+    def fits(self, data, terms: int, steps: int, effect=None, geometry=None) -> bool:
+        """Whether this is the fit of ``terms`` Prony terms and ``effect`` to ``data``
+        at ``geometry``, corrected by ``steps`` FE steps (the same curves, points,
+        weights and phases).
+
+        Examples
+        --------
+        >>> from types import SimpleNamespace as NS
+        >>> d = NS(label="2 mm", time_s=np.arange(3.0), deflection_mm=np.ones(3),
+        ...        sd_mm=np.ones(3), used=np.ones(3, bool))
+        >>> m = FittedTimeModel(NS(terms=1), [d], {"applied": True, "iterations": 2}, (d,))
+        >>> m.fits([d], 1, 2), m.fits([d], 2, 2), m.fits([d], 1, 0)
+        (True, False, False)
+        """
+        record = self.correction or {}
+        done = int(record.get("iterations", 0)) if record.get("applied") else 0
+        if (self.fit.terms != terms or self.effect != effect or done != int(steps)
+                or self.geometry != geometry or len(data) != len(self.fitted_to)):
+            return False
+        keys = ("time_s", "deflection_mm", "sd_mm", "used")
+        return all(a.label == b.label and all(np.array_equal(getattr(a, k), getattr(b, k))
+                                              for k in keys)
+                   for a, b in zip(data, self.fitted_to))
+
+
+def solve_times(time_s, breaks, grading=None) -> np.ndarray:
     """The FE solve's times: every break of the suction's slope, and graded steps after each.
 
     Parameters
@@ -47,6 +91,9 @@ def solve_times(time_s, breaks) -> np.ndarray:
         The samples (s, increasing).
     breaks : array_like of int
         Sample indices where the suction's slope changes, with the first and the last.
+    grading : tuple of float, optional
+        ``(first step s, growth, largest step s)``; default
+        ``(FIRST_STEP_S, STEP_GROWTH, MAX_STEP_S)``.
 
     Returns
     -------
@@ -54,21 +101,22 @@ def solve_times(time_s, breaks) -> np.ndarray:
 
     Examples
     --------
-    One second of constant suction: 28 steps instead of a sample's each, the
-    largest 0.1 s:
+    One second of constant suction: 19 steps instead of a sample's each, the
+    largest 0.15 s:
 
     >>> t = solve_times([0.0, 0.5, 1.0], [0, 2])
     >>> t.size, t[:4].round(5).tolist(), float(np.diff(t).max().round(3))
-    (28, [0.0, 0.001, 0.00225, 0.00381], 0.1)
+    (19, [0.0, 0.001, 0.0025, 0.00475], 0.15)
     """
+    first, growth, largest = grading or (FIRST_STEP_S, STEP_GROWTH, MAX_STEP_S)
     t = np.asarray(time_s, dtype=float)
     edges = t[np.unique(np.concatenate([[0], np.asarray(breaks, int), [t.size - 1]]))]
     out = [edges]
     for a, b in zip(edges[:-1], edges[1:]):
-        x, step = a + FIRST_STEP_S, FIRST_STEP_S
+        x, step = a + first, first
         while x < b - 1e-9:
             out.append([x])
-            step = min(step * STEP_GROWTH, MAX_STEP_S)
+            step = min(step * growth, largest)
             x += step
     return np.unique(np.round(np.concatenate(out), 9))
 
@@ -132,7 +180,7 @@ def time_fit_skin(parameters: dict, geometry, bottom: str, cause=None):
     return skin
 
 
-def fe_time_curve(skin, data, mesh=None, steps: str = "graded") -> np.ndarray:
+def fe_time_curve(skin, data, mesh=None, steps: str = "graded", grading=None) -> np.ndarray:
     """The FE time solve of ``skin`` under one fitted curve's suction, at its samples.
 
     Parameters
@@ -146,6 +194,8 @@ def fe_time_curve(skin, data, mesh=None, steps: str = "graded") -> np.ndarray:
         "graded": the steps of :func:`solve_times`, read at the samples by PCHIP
         between breaks; "samples": a step at every sample and, after each break,
         at :data:`GRADED_STEPS_S` (as the virtual experiments; the reference).
+    grading : tuple of float, optional
+        The graded steps' ``(first s, growth, largest s)`` (:func:`solve_times`).
 
     Returns
     -------
@@ -162,7 +212,7 @@ def fe_time_curve(skin, data, mesh=None, steps: str = "graded") -> np.ndarray:
     t = np.asarray(data.time_s, dtype=float)
     p = np.asarray(data.pressure_mbar, dtype=float)
     if steps == "graded":
-        tf = solve_times(t, data.breaks)
+        tf = solve_times(t, data.breaks, grading)
     elif steps == "samples":
         switches = t[np.asarray(data.breaks, dtype=int)]
         fine = (switches[:, None] + GRADED_STEPS_S[None, :]).ravel()

@@ -37,6 +37,7 @@ from ._time_fit import (
     fit_data_of,
     fit_time_model,
 )
+from ._time_correction import FittedTimeModel
 from ._time_intervals import laplace_intervals, time_bound_flags
 from ._time_model import G_BOUNDS, TAU_BOUNDS_S
 from ._window_focusing import IdentificationError
@@ -276,8 +277,11 @@ def identify_time_data(data, space, *, terms: int = 1, probes=None, curve=None,
              "method": "given" if noise_um is not None else
              "the loader's (third differences in time, not below q/sqrt(12))",
              "resolution_mm": [c.resolution_mm for c in prep["curves"]]}
-    return _time_identification(data, {**prep, "rays": rays}, fit, intervals, flags, settings,
-                                noise)
+    result = _time_identification(data, {**prep, "rays": rays}, fit, intervals, flags,
+                                  settings, noise)
+    result.fitted = FittedTimeModel(fit, corrected, correction, tuple(fit_data),
+                                    prep["geometry"], effect)
+    return result
 
 
 def _corrected(prep, rays, fit_data, fit, steps, seed, warnings) -> tuple:
