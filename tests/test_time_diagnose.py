@@ -108,3 +108,38 @@ def test_a_study_of_time_curves_has_r_parameters_spectrum_and_cause(tmp_path):
     for row in (mode1, mode2):
         assert 0 < row["g_1"] and 0 < row["tau_1_s"] and row["x1d_mpa"] > 0
         assert row["cause"] == VISCOELASTIC_CREEP  # both examples creep
+
+
+def test_an_edge_the_curves_do_not_hold_is_undetermined_not_beyond_space():
+    """A mode-1 curve on the 2 mm probe over a thick dermis does not tell X1h/X1d = 1e-4
+    from 1e-3: the fit may end at the window's edge, or a node inside, by chance. Such a
+    parameter (chi^2 changes by less than 1 a decade inward, all else held, and its
+    interval is open at both ends) is reported undetermined, not beyond the space; one
+    the curves push against the edge, or bound on one side, stays beyond the space."""
+    from skinsuction.diagnose._time import _undetermined
+    from skinsuction.identify._time_intervals import FLAT_DELTA_CHI2, _flat_inward
+
+    class Rising:  # chi^2 / 2, rising linearly away from the lower edge of theta[1]
+        lower, upper = np.array([-4.0, -4.0]), np.array([1.0, 0.3])
+
+        def __init__(self, chi2_per_decade):
+            self.slope = chi2_per_decade
+
+        def __call__(self, t):
+            return 0.5 * self.slope * (np.atleast_2d(t)[:, 1] - self.lower[1])
+
+    theta = np.array([-1.5, -4.0])
+    for chi2_per_decade, flat in ((0.5 * FLAT_DELTA_CHI2, True), (3.0, False)):
+        obj = Rising(chi2_per_decade)
+        assert _flat_inward(obj, theta, 1, "lower", obj(theta)[0]) is flat
+    # at the upper edge the step inward is downward, and clipped to the window
+    obj = Rising(0.1)
+    assert _flat_inward(obj, np.array([-1.5, 0.3]), 1, "upper", obj([[-1.5, 0.3]])[0])
+    js = {"at_bound": {"X1h": {"at_bound": True, "flat": True}},
+          "intervals": {"X1h": {"lower_open": True, "upper_open": True}}}
+    assert _undetermined(js, "X1h")
+    js["intervals"]["X1h"]["upper_open"] = False  # bounded above: the curves say something
+    assert not _undetermined(js, "X1h")
+    js["intervals"]["X1h"]["upper_open"], js["at_bound"]["X1h"]["flat"] = True, False
+    assert not _undetermined(js, "X1h")  # pushed against the edge: beyond the space
+    assert not _undetermined({"at_bound": {}, "intervals": {}}, "X1h")

@@ -95,6 +95,14 @@ def _bound_flags(fd, models, warnings) -> dict:
     return at_bound
 
 
+def _undetermined(js: dict, name: str) -> bool:
+    """A parameter at an edge that the curves do not hold there (``flat``) and whose
+    interval is open at both ends: where it sits is no estimate, and no edge either."""
+    flag = (js.get("at_bound") or {}).get(name) or {}
+    iv = (js.get("intervals") or {}).get(name) or {}
+    return bool(flag.get("flat") and iv.get("lower_open") and iv.get("upper_open"))
+
+
 def _gain(el, ve, fin) -> dict:
     """What the final model gains over the elastic one (BIC, chi^2), and the RMS of
     each phase of each curve: elastic, creep alone, final model."""
@@ -184,7 +192,8 @@ def diagnose_time_data(data, space, settings: Settings | None = None, *, thickne
         none), ``cause`` and ``named`` (the first of them, or ``none``),
         ``verdict`` (``cause_found``, ``neo_hookean_fits``, ``unexplained_misfit``: the
         elastic model misfits and no effect earns its place, or ``beyond_space``: the
-        model it stands on sits at an edge of the space), ``steps`` (each
+        model it stands on sits at an edge of the space; not for a parameter the
+        curves do not determine at all, listed in ``undetermined``), ``steps`` (each
         step's options, effect added and ties), ``removed``, ``final`` (its fit,
         intervals and skin), ``elastic`` and ``viscoelastic`` fits (parameters,
         chi^2, BIC, misfit p, chi^2 and RMS per phase), ``gain`` (of the final
@@ -268,10 +277,19 @@ def _judge(run: _Run, fd, settings, warnings) -> dict:
                "unexplained_misfit" if misfit else "neo_hookean_fits")
     at_bound = _bound_flags(fd, (("elastic", base, el), ("viscoelastic", visco, ve))
                             + ((("final", final, fin),) if effects else ()), warnings)
-    # never a silent bound: the model the verdict stands on must not sit at an edge
+    # never a silent bound: the model the verdict stands on must not sit at an edge,
+    # unless the curves do not determine that parameter at all (said as loudly)
     standing = "final" if effects else "elastic"
+    undetermined = [name for name in at_bound.get(standing, [])
+                    if _undetermined(fin if effects else el, name)]
     beyond = [{"model": (final if effects else base).name, "parameter": name}
-              for name in at_bound.get(standing, [])]
+              for name in at_bound.get(standing, []) if name not in undetermined]
+    for name in undetermined:
+        warnings.append(f"UNDETERMINED: the {standing} model's {name} is not determined by "
+                        "these curves: its interval spans the whole space (open at both "
+                        "ends), and a decade inward of the edge it sits at changes chi^2 by "
+                        "less than 1; the verdict does not stand on it (a second, larger "
+                        "probe determines the hypodermis)")
     if beyond:
         verdict = "beyond_space"
         warnings.append(f"BEYOND SPACE: the {standing} model sits at an edge of the space or "
@@ -292,6 +310,7 @@ def _judge(run: _Run, fd, settings, warnings) -> dict:
     warnings += [f"FE correction: {n}" for n in run.fitter.correction_failures]
     return {"el": el, "ve": ve, "fin": fin, "effects": effects, "misfit": misfit,
             "verdict": verdict, "at_bound": at_bound, "beyond": beyond,
+            "undetermined": undetermined,
             "patterns": patterns, "warnings": warnings}
 
 
@@ -335,6 +354,7 @@ def _assemble(data, prep, settings, run: _Run, j: dict) -> dict:
                      "ambiguity_bic": settings.ambiguity_bic,
                      "elastic_misfits": bool(j["misfit"]), "causes_tried": fitter.causes},
         "at_bound": j["at_bound"], "beyond_space": j["beyond"],
+        "undetermined": j["undetermined"],
         "geometry": {**prep["geometry"].to_dict(),
                      "notes": prep["space"].notes(sorted(prep["rays"])) + fitter.notes},
         "input": {"path": str(data.path),

@@ -95,6 +95,9 @@ def time_summary_text(report: dict) -> str:
         lines.append("verdict beyond_space: the model sits at an edge of the simulated space "
                      "(" + ", ".join(b["parameter"] for b in report["beyond_space"])
                      + "): the effects named are those of the nearest simulated skin")
+    if report.get("undetermined"):
+        lines.append("Not determined by these curves (at an edge only because nothing holds "
+                     "them): " + ", ".join(report["undetermined"]) + ".")
     for pat in report.get("patterns", []):
         lines.append(f"Not explained: {pat}.")
     return "\n".join(lines)

@@ -401,7 +401,10 @@ def time_bound_flags(rays: dict, data: list, fit: TimeFit, config_keys=None) -> 
     Returns
     -------
     dict
-        The flags of :func:`skinsuction.identify.bound_flags` by parameter.
+        The flags of :func:`skinsuction.identify.bound_flags` by parameter, each with
+        ``neutral`` (a cause at its neutral end: the model without it) and ``flat``
+        (a modulus at a window edge that the curves do not hold there:
+        :data:`FLAT_DECADES`, :data:`FLAT_DELTA_CHI2`).
     """
     model = TimeCurveModel(rays, data, fit.terms, getattr(fit, "layers", False))
     obj = TimeObjective(model)
@@ -418,14 +421,35 @@ def time_bound_flags(rays: dict, data: list, fit: TimeFit, config_keys=None) -> 
     keys = list(keys) + [(f"the spectrum's bounds (g {_bounds_text('g')}, tau "
                           f"{_bounds_text('tau')} s)",) * 2] * (len(names) - len(keys))
     flags = bound_flags(obj, theta, names, kinds, keys)
-    for f in flags:
+    with np.errstate(all="ignore"):
+        cost = float(obj(theta[None, :])[0])
+    for i, f in enumerate(flags):
         f["neutral"] = False
+        f["flat"] = bool(f["edge"] == "window" and kinds[i] == "log"
+                         and _flat_inward(obj, theta, i, f["side"], cost))
     if cause:
         # a cause at its neutral end (e.g. X2d = 0) is the model without it, not an edge
         f, c = flags[2], model.cause
         end = c.nodes[0] if f["side"] == "lower" else c.nodes[-1]
         f["neutral"] = bool(f["edge"] == "window" and end == c.neutral)
     return {f["parameter"]: f for f in flags}
+
+
+#: A modulus at an edge of the window is ``flat`` there when moving it this many
+#: decades inward, all else held, changes chi^2 by less than :data:`FLAT_DELTA_CHI2`:
+#: the curves do not hold it at the edge (a 2 mm probe over a thick dermis cannot tell
+#: X1h/X1d = 1e-4 from 1e-3), and with the others re-fitted the change is smaller still.
+FLAT_DECADES, FLAT_DELTA_CHI2 = 1.0, 1.0
+
+
+def _flat_inward(obj, theta, i, side, cost) -> bool:
+    """Whether chi^2 changes by less than FLAT_DELTA_CHI2 a decade inward of the edge."""
+    t = np.array(theta, dtype=float)
+    t[i] += FLAT_DECADES if side == "lower" else -FLAT_DECADES
+    t[i] = min(max(t[i], obj.lower[i]), obj.upper[i])
+    with np.errstate(all="ignore"):
+        inward = float(obj(t[None, :])[0])
+    return bool(np.isfinite(inward) and 2.0 * (inward - cost) < FLAT_DELTA_CHI2)
 
 
 def _bounds_text(kind):
