@@ -72,7 +72,8 @@ def test_the_check_counts_coverage_verdicts_and_the_group_ratio():
         "file": ["sub/" + f for f in truth["file"]], "x1d_mpa": est,
         "x1d_lower_mpa": est * 0.98, "x1d_upper_mpa": est * 1.02,  # S3: 20 % off, not held
         "x1h_mpa": 1e-3, "x1h_lower_mpa": [np.nan] * 8, "x1h_upper_mpa": 2e-3,  # open below
-        "cause": ["none"] * 7 + ["strain_stiffening"]})
+        "cause": ["none"] * 7 + ["strain_stiffening"],
+        "verdict": ["neo_hookean_fits"] * 6 + ["beyond_space", "cause_found"]})
     check = layers_study_check(curves, truth)
     (row,) = check["per_measurement"]
     assert (row["n"], row["x1d_covered"], row["x1h_covered"]) == (8, 7, 8)
@@ -82,6 +83,7 @@ def test_the_check_counts_coverage_verdicts_and_the_group_ratio():
     assert row_edge["x1h_covered"] == 4
     assert row["x1d_error_median"] == pytest.approx(0.0, abs=1e-12)
     assert row["causes"] == "none 7; strain_stiffening 1"
+    assert row["verdicts"] == "beyond_space 1; cause_found 1; neo_hookean_fits 6"
     on = {g["on"]: g for g in check["groups"]}
     # the study's statistic, the change of the median log X1d: each treated truth is
     # 1.25 x a control one, so +25 % exactly
@@ -91,6 +93,6 @@ def test_the_check_counts_coverage_verdicts_and_the_group_ratio():
     assert on["estimates"]["median_change_percent"] == pytest.approx(100 * expected)
     assert on["truth"]["n"] == 8 and on["truth"]["ci_low_percent"] <= 25.0
     md = layers_study_markdown(check, LayersStudyDesign(subjects=8), seconds=12.0)
-    assert "7 (88 %)" in md and "+25.0 %" in md
+    assert "7 (88 %)" in md and "+25.0 %" in md and "| beyond_space 1;" in md
     with pytest.raises(ValueError, match="without a truth"):
         layers_study_check(curves.assign(file="other.csv"), truth)

@@ -285,7 +285,7 @@ def layers_study_check(curves: pd.DataFrame, truth: pd.DataFrame) -> dict:
     dict
         ``per_measurement``: rows of the coverage of the 95 % intervals of X1d and
         X1h (an open end counts as holding), the median and 95th percentile of
-        the X1d error, the errors, and the verdicts, per kind of measurement
+        the X1d error, the causes named and the verdicts, per kind of measurement
         (ramp, mode 1); ``groups``: per kind, the study's own group comparison
         (:func:`skinsuction.cohort.compare_groups`: the treated/control change of
         the median log X1d, its bootstrap interval, the Mann-Whitney p) on the
@@ -306,14 +306,18 @@ def layers_study_check(curves: pd.DataFrame, truth: pd.DataFrame) -> dict:
         err = (ok["x1d_mpa"] / ok["true_x1d_mpa"] - 1).abs()
         holds_d = _interval_holds(ok, ok["true_x1d_mpa"], "x1d")
         holds_h = _interval_holds(ok, ok["true_x1h_mpa"], "x1h")
-        verdicts = rows["cause"].fillna("(error)").value_counts().to_dict()
+        causes = rows["cause"].fillna("(error)").value_counts().to_dict()
+        # the verdict says what a cause stands on (beyond_space: an edge of the space)
+        verdicts = (rows["verdict"].fillna("(error)").value_counts().to_dict()
+                    if "verdict" in rows else {})
         per.append({"measurement": kind, "n": len(rows), "identified": len(ok),
                     "x1d_covered": int(holds_d.sum()), "x1h_covered": int(holds_h.sum()),
                     "x1d_coverage": float(holds_d.mean()) if len(ok) else math.nan,
                     "x1h_coverage": float(holds_h.mean()) if len(ok) else math.nan,
                     "x1d_error_median": float(err.median()) if len(ok) else math.nan,
                     "x1d_error_p95": float(err.quantile(0.95)) if len(ok) else math.nan,
-                    "causes": "; ".join(f"{k} {v}" for k, v in sorted(verdicts.items()))})
+                    "causes": "; ".join(f"{k} {v}" for k, v in sorted(causes.items())),
+                    "verdicts": "; ".join(f"{k} {v}" for k, v in sorted(verdicts.items()))})
         for what, col in (("estimates", "x1d_mpa"), ("truth", "true_x1d_mpa")):
             # the study's own comparison (comparison.csv), on the estimates and on the truth
             frame = pd.DataFrame({"group": ok["true_group"].to_numpy(),
@@ -335,13 +339,14 @@ def layers_study_markdown(check: dict, design: LayersStudyDesign, seconds=None) 
     if seconds is not None:
         lines += [f"`skinsuction study` took {seconds:.0f} s.", ""]
     lines += ["| measurement | n | identified | X1d interval holds the truth | X1h | "
-              "median X1d error | 95th pct | causes named |", "|---|---|---|---|---|---|---|---|"]
+              "median X1d error | 95th pct | causes named | verdicts |",
+              "|---|---|---|---|---|---|---|---|---|"]
     for r in check["per_measurement"]:
         lines.append(f"| {r['measurement']} | {r['n']} | {r['identified']} | "
                      f"{r['x1d_covered']} ({100 * r['x1d_coverage']:.0f} %) | "
                      f"{r['x1h_covered']} ({100 * r['x1h_coverage']:.0f} %) | "
                      f"{100 * r['x1d_error_median']:.2f} % | {100 * r['x1d_error_p95']:.2f} % | "
-                     f"{r['causes']} |")
+                     f"{r['causes']} | {r['verdicts']} |")
     lines += ["", "Treated against control, the study's comparison (median log X1d, "
               "Mann-Whitney U), on the estimates and on the truth:", "",
               "| measurement | on | n | median change | bootstrap 95 % | p |",
