@@ -268,6 +268,39 @@ def test_a_causes_rays_are_read_off_its_own_geometry_space(cause_space, tmp_path
         space.rays(2.0, 1.1, 3.0, coordinate=1.15)
 
 
+def test_a_space_unpacked_into_job_files_assembles_again_beside_a_job_solved_afresh(
+        cause_space, tmp_path):
+    """A grid extended by new nodes solves only those: the shipped rays go back into job
+    files (checked against fresh FE solves) and assemble with the new jobs' files."""
+    from skinsuction.space import unpack_geometry_space
+    from skinsuction.space._geometry_space import _write_compact
+    from skinsuction.space._storage import _read_parquet
+
+    folder, space = cause_space
+    cause, g, out = _pre_tension(), space.grid, tmp_path / "rays"
+    jobs = {f"pre_tension__td{td:g}": (td, list(g.th_nodes)) for td in g.td_nodes}
+    fresh = list(jobs)[2]
+    compute_bundle(g.ray_ids(SPEC, g.td_nodes[2], cause), out / f"{fresh}.parquet",
+                   SPEC.pressures_mbar, SPEC.mesh, list(SPEC.fallback),
+                   metadata={"source_hash": {"model": "today"}})
+    done = unpack_geometry_space(folder / "pre_tension.parquet",
+                                 {**jobs, "pre_tension__td9": (9.0, list(g.th_nodes))}, out,
+                                 cause=cause, source_hash="today", check=1)
+    assert done[fresh] == "kept" and done["pre_tension__td9"] == "not in the file"
+    assert sorted(k for k, v in done.items() if v == "written") == sorted(set(jobs) - {fresh})
+    again = assemble_geometry_space(sorted(out.glob("*.parquet")), tmp_path / "again.parquet",
+                                    SPEC, g, cause=cause)
+    assert np.array_equal(again.deflection, space.deflection, equal_nan=True)
+    # a file whose rays today's FE model does not give is refused, naming the ray
+    _, meta = _read_parquet(folder / "pre_tension.parquet")
+    _write_compact(space.deflection.reshape(-1) * 1.001, tmp_path / "old.parquet", meta)
+    with pytest.raises(ValueError, match="solved afresh differs"):
+        unpack_geometry_space(tmp_path / "old.parquet", jobs, tmp_path / "other", cause=cause,
+                              source_hash="today")
+    with pytest.raises(ValueError, match="not of the cause given"):
+        unpack_geometry_space(folder / "pre_tension.parquet", jobs, out, source_hash="today")
+
+
 def test_a_jobs_share_of_the_grid_is_its_t_h_nodes_and_the_shares_make_the_whole():
     grid = GeometryGrid([0.2, 0.3, 0.45, 0.7, 1.0], [0.5, 1, 2, 4, 8])
     cause = _pre_tension()

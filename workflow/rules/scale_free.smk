@@ -94,7 +94,12 @@ if SF.get("geometry"):
             if _name not in SF_CAUSES or SF_CAUSES[_name].geometric:
                 raise ValueError(f"causes.names: {_name!r} is not a cause of the space other "
                                  "than a thickness (those are neo-Hookean rays)")
-            SF_GEOMETRY[_name] = (SF_CAUSES[_name], GeometryGrid.from_config(_gc))
+            _own = (_gc.get("t_d_over_a_of") or {}).get(_name)
+            SF_GEOMETRY[_name] = (SF_CAUSES[_name], GeometryGrid.from_config(
+                {**_gc, "t_d_over_a": _own} if _own else _gc))
+        for _name in _gc.get("t_d_over_a_of") or {}:
+            if _name not in _gc.get("names", []):
+                raise ValueError(f"causes.t_d_over_a_of: {_name!r} is not in causes.names")
     except ValueError as err:
         raise _config_error("scale_free_space.geometry", err)
 SF_GEOMETRY_DIR = f"{SF_DIR}/{GEOMETRY_FOLDER}"
@@ -262,6 +267,33 @@ rule ship_geometry_space:
         "../envs/skinsuction.yaml"
     script:
         "../scripts/ship_geometry_space.py"
+
+
+rule unpack_geometry_space:
+    """Developer rule (no target asks for it): the shipped geometry space of a model back
+    in job files, so that a grid with more nodes solves only the new ones.
+
+    ``snakemake --cores 2 logs/scale_free/geometry/unpack_<model>.json``, then build the
+    space with ``--rerun-triggers mtime`` (the job files have no Snakemake record).
+    """
+    input:
+        space=lambda w: str(SF_SHIPPED / GEOMETRY_FOLDER / f"{w.gmodel}.parquet"),
+    output:
+        manifest="logs/scale_free/geometry/unpack_{gmodel}.json",
+    log:
+        "logs/scale_free/geometry/unpack_{gmodel}.log",
+    params:
+        jobs=lambda w: {b: (td, list(ths)) for b, (m, td, _, _, ths) in SF_GEOMETRY_BUNDLES.items()
+                        if m == w.gmodel},
+        out_dir=f"{SF_GEOMETRY_DIR}/rays",
+        cause=lambda w: None if w.gmodel == BASELINE else w.gmodel,
+        causes=SF.get("causes"),
+        code=code_hash(*FE_RAY_CODE),
+    threads: 1
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/unpack_geometry_space.py"
 
 
 rule assemble_pair_space:

@@ -106,7 +106,8 @@ from ._pairs import (
     read_pair_spaces,
     space_causes,
 )
-from ._geometry_files import default_geometry_file, geometry_file_for, ship_geometry_space
+from ._geometry_files import (default_geometry_file, geometry_file_for, ship_geometry_space,
+                              unpack_geometry_space)
 from ._geometry_space import (
     GEOMETRY_FOLDER,
     GeometryGrid,
@@ -222,6 +223,7 @@ __all__ = [
     "default_cache_dir", "spaces_at", "fit_reach_mm", "FIT_REACH", "ThicknessNuisance", "window_nodes",
     "GEOMETRY_FOLDER", "GeometryGrid", "GeometrySpace", "assemble_geometry_space",
     "default_geometry_file", "read_geometry_space", "same_rays", "ship_geometry_space",
+    "unpack_geometry_space",
     "geometry_file_for", "cause_coordinates", "cause_geometry_space",
     "THICKNESS_RESOLUTION_MM", "LAYER_PATHS", "layer_thicknesses",
     "SpaceCoordinates", "load", "reference_pressure", "similar_length",

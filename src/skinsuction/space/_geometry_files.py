@@ -13,7 +13,8 @@ from pathlib import Path
 from ._geometry_space import GEOMETRY_FILE, GEOMETRY_FOLDER, read_geometry_space
 from ._storage import _read_parquet
 
-__all__ = ["geometry_file_for", "default_geometry_file", "ship_geometry_space"]
+__all__ = ["geometry_file_for", "default_geometry_file", "ship_geometry_space",
+           "unpack_geometry_space"]
 
 
 def geometry_file_for(space_path, solve_on_demand=True):
@@ -122,3 +123,109 @@ def ship_geometry_space(built_file, dest=None, *, build_command: str | None = No
     with atomic_output(out / PROVENANCE_FILE) as tmp:
         tmp.write_text(json.dumps(record, indent=1) + "\n", encoding="utf-8")
     return record
+
+
+def unpack_geometry_space(space_file, jobs: dict, out_dir, *, cause=None,
+                          source_hash: str, check: int = 1, seed: int = 0) -> dict:
+    """Write a geometry space's rays back into the workflow's job files, to extend its grid.
+
+    A shipped space keeps its rays but not the job files it was assembled from, so a
+    grid with more nodes (``scale_free_space.geometry.causes.t_d_over_a_of``) would
+    solve every node again.  Each job whose rays the file holds becomes a job file as
+    :func:`compute_bundle` writes it, once ``check`` of its rays (drawn with ``seed``),
+    solved afresh, equal the file's to the 6e-8 of M it stores: the rays are today's
+    FE model's, and the job file records today's FE code hash.  Their CPU was counted
+    in the file they come from (``seconds`` None).
+
+    Parameters
+    ----------
+    space_file : path-like
+        A geometry space file (built or shipped).
+    jobs : dict
+        Job name -> ``(t_d/a node, t_h/a nodes)``: the workflow's jobs of this model.
+    out_dir : path-like
+        The job files' folder; an existing job file is kept as it is.
+    cause : Cause, optional
+        The file's cause (None: the neo-Hookean space).
+    source_hash : str
+        Today's FE code hash, the workflow's ``code`` of its ray jobs.
+    check, seed : int
+        Rays solved afresh per job file written, and the seed that draws them.
+
+    Returns
+    -------
+    dict
+        Job name -> "written", "kept" (its file existed) or "not in the file".
+
+    Raises
+    ------
+    ValueError
+        Naming the ray whose fresh solve differs (the FE model changed: rebuild it), or
+        a cause that is not the file's.
+    """
+    import numpy as np
+    import pandas as pd
+
+    from skinsuction._files import file_sha256
+    from skinsuction.provenance import collect
+
+    from ._geometry_space import cause_coordinates
+    from ._storage import _write_parquet
+
+    space = read_geometry_space(space_file)
+    _, meta = _read_parquet(space_file)
+    if (cause is None) != (space.cause is None) or (
+            cause is not None and (cause.name != space.cause
+                                   or cause_coordinates(cause) != list(space.coordinates))):
+        raise ValueError(f"{space_file}: holds the rays of {space.cause or 'neo_hookean'}"
+                         f" {space.coordinates or ''}, not of the cause given")
+    spec = space.spec
+    pressures = np.asarray(spec.pressures_mbar, float)
+    ids = space.grid.ray_ids(spec, cause=cause)
+    rows = dict(zip(ids, space.deflection.reshape(len(ids), pressures.size)))
+    stopped, fallback = meta.get("stopped_early") or {}, meta.get("mesh_fallback") or {}
+    source = {"file": str(space_file), "sha256": file_sha256(space_file)}
+    rng, out_dir, done = np.random.default_rng(seed), Path(out_dir), {}
+    out_dir.mkdir(parents=True, exist_ok=True)
+    for name, (td, ths) in jobs.items():
+        path = out_dir / f"{name}.parquet"
+        job_ids = space.grid.ray_ids(spec, td, cause, ths)
+        if path.exists() or not all(rid in rows for rid in job_ids):
+            done[name] = "kept" if path.exists() else "not in the file"
+            continue
+        checked = [job_ids[k] for k in rng.choice(len(job_ids), size=min(check, len(job_ids)),
+                                                  replace=False)]
+        for rid in checked:
+            _same_as_fresh(rid, rows[rid], spec, space_file)
+        frame = pd.DataFrame({
+            "ray_id": np.repeat(job_ids, pressures.size),
+            "pressure_mbar": np.tile(pressures, len(job_ids)),
+            "deflection_mm": np.concatenate([rows[rid] for rid in job_ids])})
+        infos = {rid: {"converged": rid not in stopped,
+                       "last_converged_mbar": stopped.get(rid, float(pressures[-1])),
+                       "mesh_fallback": fallback.get(rid, 0), "seconds": None}
+                 for rid in job_ids}
+        _write_parquet(frame, path, {
+            "rays": infos, "mesh": spec.mesh, "mesh_fallback": [dict(f) for f in spec.fallback],
+            "fallback_below_mbar": None, "provenance": collect(),
+            "bundle_id": f"geometry__{name}", "source_hash": {"model": source_hash},
+            "unpacked_from": {**source, "checked_afresh": checked}})
+        done[name] = "written"
+    return done
+
+
+def _same_as_fresh(rid, stored, spec, space_file) -> None:
+    """Solve ``rid`` afresh; raise unless it equals ``stored`` (NaN where it stopped)."""
+    import numpy as np
+
+    from ._ray_solve import compute_ray
+
+    curve, _, info = compute_ray(rid, spec.pressures_mbar, spec.mesh, list(spec.fallback))
+    fresh = np.asarray(curve.deflection_mm, float)
+    if not info["converged"]:
+        fresh[~(np.asarray(spec.pressures_mbar) <= info["last_converged_mbar"])] = np.nan
+    ok = np.isfinite(fresh)
+    if not (np.array_equal(ok, np.isfinite(stored))
+            and np.allclose(stored[ok], fresh[ok], rtol=1e-6, atol=1e-9)):
+        raise ValueError(f"{space_file}: ray {rid} solved afresh differs from the file's "
+                         "(the FE model changed since it was built): rebuild the space")
