@@ -146,6 +146,24 @@ def test_the_confusion_with_both_layers_given_draws_neither_thickness(workdir):
     assert "results/diagnosis/confusion_given_layers/pre_tension_201000" in out
 
 
+def test_a_cause_with_t_d_nodes_of_its_own_has_a_job_a_node_and_unpacks_the_shipped_ones(
+        workdir):
+    config = yaml.safe_load((workdir / "config" / "config.yaml").read_text())
+    causes = config["scale_free_space"]["geometry"]["causes"]
+    own = causes["t_d_over_a_of"]["strain_stiffening"]
+    assert set(causes["t_d_over_a"]) < set(own)
+    out = snakemake(workdir, "-n",
+                    "results/simulated_space/scale_free/geometry/strain_stiffening.parquet")
+    assert job_counts(out)["simulate_geometry_bundle"] == len(own)
+    assert "strain_stiffening__td0.7354" in out
+    out = snakemake(workdir, "-n", "logs/scale_free/geometry/unpack_strain_stiffening.json")
+    assert job_counts(out) == {"unpack_geometry_space": 1}
+    bad = {"scale_free_space": {"geometry": {"causes": {"t_d_over_a_of": {"dermis_thickness":
+                                                                          own}}}}}
+    out = snakemake(workdir, "-n", *write_config(workdir, "bad_own", bad)[:2], check=False)
+    assert "t_d_over_a_of: 'dermis_thickness' is not in causes.names" in out
+
+
 def test_default_invocation_runs_the_paper_study(workdir):
     counts = job_counts(snakemake(workdir, "-n"))
     assert counts["simulate_row"] == 28

@@ -269,6 +269,26 @@ rule ship_geometry_space:
         "../scripts/ship_geometry_space.py"
 
 
+rule ship_geometry_model:
+    """Developer rule: ship one model's built geometry space (``ship_geometry_space`` ships
+    them all): ``snakemake --cores 1 logs/scale_free/geometry/ship_<model>.json``."""
+    input:
+        space=f"{SF_GEOMETRY_DIR}/{{gmodel}}.parquet",
+    output:
+        manifest="logs/scale_free/geometry/ship_{gmodel}.json",
+    log:
+        "logs/scale_free/geometry/ship_{gmodel}.log",
+    params:
+        dest=str(SF_SHIPPED),
+        repo=str(Path(workflow.basedir)),
+        build_command=lambda w: f"snakemake --cores 2 {SF_GEOMETRY_DIR}/{w.gmodel}.parquet",
+    threads: 1
+    conda:
+        "../envs/skinsuction.yaml"
+    script:
+        "../scripts/ship_geometry_space.py"
+
+
 rule unpack_geometry_space:
     """Developer rule (no target asks for it): the shipped geometry space of a model back
     in job files, so that a grid with more nodes solves only the new ones.
