@@ -7,7 +7,7 @@ with job(snakemake.log[0]):
     import json
     from pathlib import Path
 
-    from skinsuction._files import atomic_output
+    from skinsuction.jobs import atomic_output
     from skinsuction.space import ship_geometry_space
 
     shipped, spaces = {}, snakemake.input.space

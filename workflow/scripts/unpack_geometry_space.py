@@ -6,7 +6,7 @@ with job(snakemake.log[0], threads=snakemake.threads):
     import collections
     import json
 
-    from skinsuction._files import atomic_output
+    from skinsuction.jobs import atomic_output
     from skinsuction.space import registry_from_config, unpack_geometry_space
 
     name = snakemake.params.cause
