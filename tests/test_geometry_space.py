@@ -429,9 +429,11 @@ def test_two_seeded_random_rays_of_each_default_geometry_space_are_todays_fe_mod
 @pytest.mark.skipif(default_geometry_file() is None, reason="no geometry space built or shipped")
 def test_a_thickness_bracket_moves_the_centre_by_the_change_the_space_reads(tmp_path):
     """Strain stiffening's rays read at a subject's layers (0.79 over 2.17 mm, 2 mm probe)
-    are off by up to 1 %, but alike at the hypodermis's +1 sd bracket: their ratio is
-    the FE model's change, so the bracket is the centre moved by it (28 November 2026:
-    within 0.14 % on 104 such pairs, the rays off by up to 0.95 %)."""
+    are off by more than the space's 0.2 % target, but alike at the hypodermis's +1 sd
+    bracket: their ratio is the FE model's change, so the bracket is the centre moved by
+    it (29 November 2026, 23 t_d/a nodes: read off by 0.30 %, moved within 0.07 %; on
+    the 15 nodes of 28 November: within 0.14 % on 104 such pairs, read off by up to
+    0.95 %)."""
     from skinsuction.space import BASELINE, read_ray_spaces
     from skinsuction.space._shipped import default_space_dir
 
@@ -450,8 +452,10 @@ def test_a_thickness_bracket_moves_the_centre_by_the_change_the_space_reads(tmp_
     ok = np.isfinite(fe_plus) & np.isfinite(moved) & (fe_plus > 0)
     # rays that stop near their limit load stop the moved ones there too
     assert ok.sum() >= 0.9 * np.isfinite(fe_plus).sum() and np.all(moved[..., 0] == 0.0)
-    assert np.abs(read_plus[ok] / fe_plus[ok] - 1).max() > 0.005  # each read is off ...
-    assert np.abs(moved[ok] / fe_plus[ok] - 1).max() < 0.002  # ... the change is not
+    read_error = np.abs(read_plus[ok] / fe_plus[ok] - 1).max()
+    moved_error = np.abs(moved[ok] / fe_plus[ok] - 1).max()
+    assert read_error > 0.002  # the read is off by more than the target ...
+    assert moved_error < 0.002 and moved_error < read_error / 3  # ... the change is not
     # outside the grid (t_d/a below 0.125) the bracket is solved, as rays() does
     asked = []
     solver.rays = lambda *a, **k: asked.append(a) or (fe_plus, {"rays": 8})
