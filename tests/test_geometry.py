@@ -215,6 +215,42 @@ def test_a_given_thickness_sd_is_a_nuisance_the_fit_recovers():
     assert fit.chi2 == pytest.approx(((1.42 - 1.3) / 0.1) ** 2, rel=0.05)
 
 
+def test_a_ramp_estimate_moves_to_the_thickness_its_curves_prefer(tmp_path):
+    """Two probes pin a thin dermis down far better than its 0.1 mm sd: a 0.56 mm
+    dermis given as 0.50 +- 0.1 mm is fitted at the thickness the curves prefer, and
+    the interval of X1d holds the truth; held at 0.50 mm, X1d was off by several
+    times its interval's half-width (the layers study's ramps covered it in 62 %)."""
+    from skinsuction.identify.measured_fit import identify_data
+    from skinsuction.space import load_space
+    from skinsuction.space._shipped import default_space_dir
+
+    x1d, x1h, t_d, given = 0.02, 0.0006, 0.56, 0.50
+    p = np.arange(0.0, 101.0, 2.0)
+    rng = np.random.default_rng(3)
+    lines = [f"# dermis_thickness_mm: {given}", "# dermis_thickness_sd_mm: 0.1",
+             "# hypodermis_thickness_mm: 1.5", "probe_mm,pressure_mbar,deflection_mm"]
+    for probe in (2.0, 6.0):
+        c = simulate(Skin.two_layer(x1d, x1h, t_d=t_d, t_h=1.5), probe=probe, pressures_mbar=p)
+        m = np.asarray(c.deflection_mm) + rng.normal(0.0, 1e-3, p.size)
+        lines += [f"{probe:g},{a:g},{b:.6f}" for a, b in zip(p, m)]
+    path = tmp_path / "ramp.csv"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    space = load_space(default_space_dir(), cache_dir=tmp_path / "cache")
+    r = identify_data(load_measured(path), space, objective="weighted", repeats=2, seed=0)
+    rec = r["geometry"]["thickness_uncertainty"]["dermis_thickness"]
+    assert rec["estimate_at_mm"] == pytest.approx(t_d, abs=0.02)
+    iv, est = r["intervals"]["X1d"], r["estimate"]["x1d_mpa"]
+    assert iv["lower"] <= x1d <= iv["upper"]
+    # the move is what holding the given thickness got wrong: over twice the interval's
+    # half-width, and the estimate three times nearer the truth than the held one
+    move = rec["d_log_X1d_per_sd"] * (rec["estimate_at_mm"] - given) / 0.1
+    assert abs(move) > 2 * math.log(iv["upper"] / iv["lower"]) / 2
+    held = est * math.exp(-move)
+    assert abs(math.log(est / x1d)) < abs(math.log(held / x1d)) / 3
+    assert any("prefer other thicknesses" in w for w in r["warnings"])
+    assert r["skin"]["layers"][0]["thickness"] == pytest.approx(rec["estimate_at_mm"])
+
+
 def test_a_given_sd_at_the_papers_layers_brackets_the_tailed_rays_without_their_tail():
     """At 1 mm layers the shipped rays run on into the load tail; the brackets at ±1 sd
     come from rays on demand, which stop where the tail starts.  A candidate beyond

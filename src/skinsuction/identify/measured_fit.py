@@ -32,6 +32,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 
 import numpy as np
@@ -244,8 +245,9 @@ def identify_data(data, space: LoadedSpace, *, objective: str = "single", probe_
     spread = spread_of(setup, runs, wf["max_iter"])
     noise, intervals = noise_and_intervals(setup, runs.theta, noise_um, float(level),
                                            SPACE_ERROR_CORRELATED)
-    thickness = thickness_uncertainty(setup, runs.theta, runs.est, intervals, float(level),
-                                      noise)
+    thickness, est = thickness_uncertainty(setup, runs.theta, runs.est, intervals,
+                                           float(level), noise)
+    runs = dataclasses.replace(runs, est=est)
     settings = {
         "objective": objective,
         "probe_mm": float(probe_mm) if objective == "single" else None,
@@ -306,6 +308,14 @@ def _identification(setup: RampSetup, runs: RampRuns, settings, flags, spread, n
                "iterations": int(n)}
               for x, e, n in zip(runs_mpa, rep.E, rep.iterations)],
         warnings=setup.warnings,
-        skin=Skin.two_layer(float(est[0]), float(est[1]), t_d=setup.geometry.t_d,
-                            t_h=setup.geometry.t_h, bottom=space.bottom).to_dict(),
+        skin=Skin.two_layer(float(est[0]), float(est[1]), bottom=space.bottom,
+                            **_fitted_layers(setup.geometry, thickness)).to_dict(),
     )
+
+
+def _fitted_layers(geometry, thickness) -> dict:
+    """The layers the estimate was fitted at: the given ones, or those the curves prefer."""
+    t = {"t_d": geometry.t_d, "t_h": geometry.t_h}
+    for key, name in (("t_d", "dermis_thickness"), ("t_h", "hypodermis_thickness")):
+        t[key] = ((thickness or {}).get(name) or {}).get("estimate_at_mm", t[key])
+    return t
