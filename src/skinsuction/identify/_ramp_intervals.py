@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from skinsuction.space._geometry import THICKNESS_RESOLUTION_MM
+from skinsuction.space import THICKNESS_RESOLUTION_MM
 
 from ._intervals import profile_intervals
 from ._polish import polish
