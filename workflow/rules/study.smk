@@ -86,7 +86,7 @@ rule study:
 #   (results/studies_input/layers/, the truth beside it; rule make_layers_study)
 #   -> skinsuction study (results/studies/layers/: the same files as any study)
 #   -> against the truth (results/studies/layers/truth_check.md, .csv)
-# Target layers_study; not in the default target (some 30 CPU-min to make, and the
+# Target layers_study; not in the default target (62 CPU-min to make, and the
 # study itself is what is timed: results/benchmarks/studies/layers.tsv).
 
 
