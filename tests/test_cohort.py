@@ -177,6 +177,35 @@ def test_ramps_and_time_curves_are_compared_apart():
     assert "protocol" not in rows[0]
 
 
+def test_rows_of_other_code_are_set_aside_not_resumed(tmp_path, monkeypatch):
+    """A study cut short, the package then changed: its rows are kept aside, not mixed
+    with the new code's (the version string alone would not tell them apart)."""
+    import skinsuction.cohort._rows as rows_module
+    import skinsuction.provenance as provenance
+
+    path = tmp_path / "study.csv"
+    _long_study(path, n_per_group=2)
+    space, rays = _toy_space()
+    kw = dict(space=space, ray_spaces=rays, diagnose=False, repeats=1, seed=0, progress=False,
+              figures=False)
+    real, calls = rows_module._analyse, []
+
+    def cut_after_two(job):
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        calls.append(job[0])
+        return real(job)
+
+    monkeypatch.setattr(rows_module, "_analyse", cut_after_two)
+    with pytest.raises(KeyboardInterrupt):
+        run_study(path, tmp_path / "cut", **kw)
+    monkeypatch.setattr(rows_module, "_analyse", real)
+    monkeypatch.setattr(provenance, "source_hash", lambda *a, **k: "edited")
+    r = run_study(path, tmp_path / "cut", **kw)
+    assert r["resumed"] == 0
+    assert (tmp_path / "cut" / "rows.partial.jsonl.stale").exists()
+
+
 def test_a_study_cut_short_resumes_with_the_rows_it_had_finished(tmp_path, monkeypatch):
     import skinsuction.cohort._rows as rows_module
 

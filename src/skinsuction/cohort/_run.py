@@ -135,10 +135,14 @@ def _write(out, df, id_cols, comparison, notes, meta, figures: bool) -> dict:
 
 def _checkpoint(out, resume, progress, **fingerprint) -> Checkpoint:
     """The study's kept rows (:class:`Checkpoint`), said aloud when some are reused or set
-    aside; the fingerprint is what the rows depend on, with the package's version."""
+    aside; the fingerprint is what the rows depend on, with the package's version and a
+    hash of its sources and data (a fix between a cut and its rerun, as the ramps'
+    thickness move of 29 November 2026, would otherwise mix rows of both codes)."""
     from skinsuction import __version__
+    from skinsuction.provenance import source_hash
 
-    checkpoint = Checkpoint(out / CHECKPOINT_FILE, {**fingerprint, "version": __version__},
+    checkpoint = Checkpoint(out / CHECKPOINT_FILE, {**fingerprint, "version": __version__,
+                                                    "source": source_hash(".")},
                             resume=resume)
     if progress is not False and (checkpoint.resumed or checkpoint.stale):
         print(f"study: {checkpoint.resumed} finished measurements taken from {checkpoint.path}"
