@@ -159,8 +159,9 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
         obj = make_objective(setup.objective, spaces, curves, probes, setup.alpha,
                              setup.data.path)
         th = polish(obj, np.asarray(theta, dtype=float))
-        # chi^2 on the intervals' likelihood: the noise and the space's own error, whose
-        # neglect made the curves prefer a 1.3 mm dermis at 1.37 +- 0.025 mm
+        # chi^2 on the moduli intervals' likelihood (the noise and the space's own error),
+        # so that the thickness's posterior agrees with them; on the noise alone the
+        # layers study's ramps held X1d in 83 %, on it 78 % (docs/studies.md)
         x1d = float(obj.to_moduli(th.reshape(1, -1))[0, 0]) if setup.scale_free else None
         resid = likelihood_residuals(obj, setup.objective, curves, max(sigma_mm, 1e-9),
                                      MODEL_ERROR_RELATIVE if setup.scale_free else 0.0, x1d)
