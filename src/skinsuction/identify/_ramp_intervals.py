@@ -145,7 +145,6 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
         The estimate (MPa): ``est``, or the fit at the thicknesses the curves
         prefer.
     """
-    from scipy import stats
 
     space, geometry, probes, curves = setup.space, setup.geometry, setup.probes, setup.curves
     sds = {k: v for k, v in (geometry.sd or {}).items() if v and v > 0}
@@ -199,21 +198,29 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
     est0, est = est, _at_preferred(setup, fit_at, out, est)
     setup.warnings.extend(f"geometry (thickness +- 1 sd): {n}" for n in notes_seen)
     if intervals is not None:
-        z = float(stats.norm.ppf(0.5 + level / 2))
-        for i, name in enumerate(("X1d", "X1h")):
-            iv = intervals.get(name)
-            if not iv:
-                continue
-            g = math.sqrt(sum(v["log_shift"][i] ** 2 for v in out.values()))
-            e0, e = float(est0[i]), float(est[i])
-            for side, sign in (("lower", -1), ("upper", 1)):
-                h = abs(math.log(iv[side] / e0)) if iv[side] and iv[side] > 0 else 0.0
-                iv[side] = e * math.exp(sign * math.hypot(h, z * g))
-            iv["includes_thickness_sd"] = True
-        intervals["notes"] = list(intervals.get("notes", [])) + [
-            "the intervals include the sd of the given thicknesses (Laplace approximation: "
-            "the fit at each thickness +- 1 sd, a Gaussian prior on the thickness)"]
+        _widen(intervals, out, est0, est, level)
     return out, est
+
+
+def _widen(intervals, out, est0, est, level) -> None:
+    """The intervals about ``est0``, centred on ``est`` and widened in log, in
+    quadrature, by ``z`` times each thickness's move of the moduli (in place)."""
+    from scipy import stats
+
+    z = float(stats.norm.ppf(0.5 + level / 2))
+    for i, name in enumerate(("X1d", "X1h")):
+        iv = intervals.get(name)
+        if not iv:
+            continue
+        g = math.sqrt(sum(v["log_shift"][i] ** 2 for v in out.values()))
+        e0, e = float(est0[i]), float(est[i])
+        for side, sign in (("lower", -1), ("upper", 1)):
+            h = abs(math.log(iv[side] / e0)) if iv[side] and iv[side] > 0 else 0.0
+            iv[side] = e * math.exp(sign * math.hypot(h, z * g))
+        iv["includes_thickness_sd"] = True
+    intervals["notes"] = list(intervals.get("notes", [])) + [
+        "the intervals include the sd of the given thicknesses (Laplace approximation: "
+        "the fit at each thickness +- 1 sd, a Gaussian prior on the thickness)"]
 
 
 #: The farthest a thickness the curves prefer moves the estimate, in sd of the given one
