@@ -409,6 +409,25 @@ def test_without_a_solver_a_missing_probe_or_layer_is_refused_by_name():
         spaces_at(spaces, [6.0], Geometry(1.3, 1.0, given=("t_d",)))
 
 
+def test_a_study_keeps_the_slices_of_its_last_geometries_only(tmp_path):
+    """A slice tabulated for a protocol holds ~60 MB: one kept per subject grew a worker to
+    18 GB; a geometry used again is shared, one left behind is freed."""
+    import gc
+    import weakref
+
+    from skinsuction.space import GEOMETRIES_KEPT, load_space
+
+    space = load_space(cache_dir=tmp_path)  # the shipped space: read, not solved
+    first = space.at(Geometry(1.0, 3.0, given=("t_d", "t_h"))).probe(6.0)
+    assert space.at(Geometry(1.0, 3.0, given=("t_d", "t_h"))).probe(6.0) is first
+    kept = weakref.ref(first)
+    del first
+    for i in range(GEOMETRIES_KEPT):
+        space.at(Geometry(1.1 + 0.05 * i, 3.0, given=("t_d", "t_h"))).probe(6.0)
+    gc.collect()
+    assert kept() is None
+
+
 # ------------------------------------------------------------ rays solved on demand
 SPEC = RaySpec([2, 6], [0.02, 0.2], load_max=10000, load_steps=5, x1d_ref=0.01,
                mesh={"refinement": 0.5})

@@ -90,7 +90,7 @@ from ._lagrange import LagrangeAxis
 from ._load_axis import LoadAxis
 from ._coordinates import SpaceCoordinates, load, reference_pressure, similar_length
 from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
-from ._open import LoadedSpace, ProbeSpace, load_space
+from ._open import GEOMETRIES_KEPT, LoadedSpace, ProbeSpace, load_space
 from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
 from ._pair_interpolate import PairRayInterpolant, interpolant
 from ._pairs import (
@@ -188,7 +188,7 @@ from ._storage import (
 
 __all__ = [
     # the abstraction
-    "ProbeSpace", "LoadedSpace", "load_space",
+    "ProbeSpace", "LoadedSpace", "load_space", "GEOMETRIES_KEPT",
     # the default space: the workflow's build here, else the one shipped with the package
     "WORKFLOW_SPACE_DIR", "SHIPPED_SPACE_DIR", "PROVENANCE_FILE", "SpaceSource",
     "default_space_dir", "resolve_space", "shipped_provenance", "verify_shipped_files",

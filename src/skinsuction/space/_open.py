@@ -8,10 +8,8 @@ paper's grid (:class:`GriddedSpace`) and the scale-free rays
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from pathlib import Path
-from typing import Protocol
-
-import numpy as np
 
 from skinsuction._files import file_sha256
 from skinsuction.errors import InputError
@@ -23,6 +21,7 @@ from ._geometry_files import geometry_file_for
 from ._grid import read_space
 from ._interpolate import GriddedSpace
 from ._on_demand import OnDemandRays
+from ._probe_space import ProbeSpace
 from ._ray_interpolate import NeoHookeanSlice
 from ._ray_space import read_ray_space, read_ray_spaces
 from ._shipped import resolve_space
@@ -32,78 +31,10 @@ __all__ = ["ProbeSpace", "LoadedSpace", "load_space", "APERTURE_RANGE_MM"]
 #: Apertures (mm) the scale-free space accepts (rays of others are solved on demand).
 APERTURE_RANGE_MM = (1.0, 12.0)
 
-
-class ProbeSpace(Protocol):
-    """What identify and diagnose ask of the simulated space of one probe.
-
-    Attributes
-    ----------
-    layout : {"grid", "scale_free"}
-        Which layout (for messages that name configuration keys).
-    probe_mm : float
-        Aperture diameter.
-    coordinates : tuple of str
-        Names of the candidates' coordinates (moduli on a grid, logs on rays).
-    pressure_range : (float, float)
-        Pressures (mbar) a measured curve may span.
-    """
-
-    layout: str
-    probe_mm: float
-    coordinates: tuple
-    pressure_range: tuple
-
-    def interpolant_at(self, pressure_mbar, nan_policy: str = "shift"):
-        """The space at fixed pressures.
-
-        Parameters
-        ----------
-        pressure_mbar : array_like, shape (u,)
-            The measured pressures (mbar).
-        nan_policy : str
-            How non-converged nodes are handled (``"shift"``; a grid also has
-            ``"strict"``).
-
-        Returns
-        -------
-        callable
-            ``(N, d) candidates -> (N, u)`` deflections (mm), with ``lower`` and
-            ``upper`` bounds of the candidates.
-        """
-
-    def to_moduli(self, candidates) -> np.ndarray:
-        """X1d, X1h of candidates.
-
-        Parameters
-        ----------
-        candidates : array_like, shape (N, d)
-
-        Returns
-        -------
-        ndarray, shape (N, 2)
-            X1d, X1h in MPa.
-        """
-
-    def from_moduli(self, moduli) -> np.ndarray:
-        """Candidates of moduli (inverse of :meth:`to_moduli`).
-
-        Parameters
-        ----------
-        moduli : array_like, shape (N, 2)
-            X1d, X1h in MPa.
-
-        Returns
-        -------
-        ndarray, shape (N, d)
-        """
-
-    def range_note(self) -> str:
-        """What sets ``pressure_range``, for error messages.
-
-        Returns
-        -------
-        str
-        """
+#: Geometries whose slices one process keeps (least recently used dropped): a slice
+#: tabulated for a protocol holds ~60 MB a probe, and a study reads a few geometries
+#: a subject (its thickness +-1 sd, the preferred one), thousands in a study.
+GEOMETRIES_KEPT = 8
 
 
 def _is_scale_free(path: Path) -> bool:
@@ -200,7 +131,8 @@ class LoadedSpace:
         self.geometry = geometry or Geometry()
         #: solver of rays for a probe or layers the scale-free space lacks (None: refused)
         self.on_demand = on_demand
-        self._shared = {} if _shared is None else _shared  # slices by (probe, geometry)
+        # the causes' spaces, and slices by geometry (the GEOMETRIES_KEPT last used)
+        self._shared = {"geometries": OrderedDict()} if _shared is None else _shared
         self.reads_up_to_mm = {}  # probe -> how high a fit reads (mm), see :meth:`at`
 
     @classmethod
@@ -259,14 +191,26 @@ class LoadedSpace:
             Each note once.
         """
         out = []
+        kept = self._shared["geometries"].get(self._geometry_key(), {})
         for p in probes:
-            for n in self._shared.get(("notes", float(p), self._geometry_key()), []):
+            for n in kept.get(("notes", float(p)), []):
                 if n not in out:
                     out.append(n)
         return out
 
     def _geometry_key(self):
         return (round(self.geometry.t_d, 6), round(self.geometry.t_h, 6))
+
+    def _kept(self) -> dict:
+        """What is kept at :attr:`geometry` (made the most recently used)."""
+        geometries, key = self._shared["geometries"], self._geometry_key()
+        if key in geometries:
+            geometries.move_to_end(key)
+        else:
+            geometries[key] = {}
+            while len(geometries) > GEOMETRIES_KEPT:
+                geometries.popitem(last=False)
+        return geometries[key]
 
     def probe(self, p: float):
         """The space of probe ``p`` (to 1e-6 mm) at :attr:`geometry`.
@@ -304,10 +248,11 @@ class LoadedSpace:
             raise InputError(f"probe diameter {float(p):g} mm is outside the apertures the model "
                              f"is meant for ({lo:g}-{hi:g} mm; Cutometer probes are 2, 4, 6, 8 mm)")
         reach = self.reads_up_to_mm.get(float(p))
-        key = (float(p), self._geometry_key())
+        key = (float(p),)
         if not self.geometry.is_default and reach is not None:
             key += (round(reach, 4),)  # another reach may solve other rays
-        if key not in self._shared:
+        kept = self._kept()
+        if key not in kept:
             try:
                 spaces, notes = spaces_at({BASELINE: self.rays}, [float(p)], self.geometry,
                                           self.on_demand, reads_up_to_mm={float(p): reach}
@@ -315,9 +260,9 @@ class LoadedSpace:
             except GeometryOutsideSpace as err:
                 raise InputError(f"{self.info['path']}: {err} (the command-line option "
                                  "--no-solve refuses it; drop it)") from None
-            self._shared[key] = NeoHookeanSlice(spaces[BASELINE], float(p))
-            self._shared[("notes", float(p), self._geometry_key())] = notes
-        return self._shared[key]
+            kept[key] = NeoHookeanSlice(spaces[BASELINE], float(p))
+            kept[("notes", float(p))] = notes
+        return kept[key]
 
     def cause_names(self) -> list:
         """The elastic causes whose ray spaces lie beside the neo-Hookean one (a
@@ -362,8 +307,8 @@ class LoadedSpace:
             raise InputError(f"{self.info['path']}: no {name!r} rays beside the neo-Hookean "
                              f"space (causes: {', '.join(self.cause_names()) or 'none'})")
         probes = [float(p) for p in probes]
-        key = ("cause", name, tuple(probes), self._geometry_key())
-        if key not in self._shared:
+        key, kept = ("cause", name, tuple(probes)), self._kept()
+        if key not in kept:
             try:
                 out, notes = spaces_at({BASELINE: self.rays, name: spaces[name]}, probes,
                                        self.geometry, self.on_demand, solve_causes=False)
@@ -371,8 +316,8 @@ class LoadedSpace:
                 raise InputError(f"{self.info['path']}: {err}") from None
             # left out (a given thickness, or probes it was not simulated for): the
             # notes say why
-            self._shared[key] = ({p: out[name] for p in probes} if name in out else {}, notes)
-        return self._shared[key]
+            kept[key] = ({p: out[name] for p in probes} if name in out else {}, notes)
+        return kept[key]
 
     def check_probes(self, probes) -> list:
         """The probes as floats, each checked against the space (:meth:`probe`).
