@@ -454,6 +454,28 @@ def test_leaving_the_holdout_out_changes_no_fit():
     assert with_it["baseline"]["parameters"] == without["baseline"]["parameters"]
 
 
+def test_a_studys_diagnosis_leaves_the_baselines_intervals_to_the_identification():
+    # a study's row takes X1d, X1h and their intervals from the identification: the
+    # diagnosis computes the chosen cause's alone, and decides as with every interval
+    spaces = toy_spaces()
+    data = _toy_data(0.03, 0.02, 1.09, "pre_tension", 2.0, 3)
+    fast = {"repeats": 1, "holdout": False,
+            "window_focusing": {"n_samples": 300, "n_best": 10, "tolerance": 1e-6,
+                                "max_iter": 60}}
+    full = diagnose(data, spaces, Settings(**fast))
+    study = diagnose(data, spaces, Settings(**fast, intervals="cause"))
+    assert full["baseline"]["intervals"]["X1d"]["lower"] > 0
+    assert study["baseline"]["intervals"] is None
+    assert study["cause"] == full["cause"] == "pre_tension"
+    assert study["verdict"] == full["verdict"]
+    chosen = [next(c for c in r["candidates"] if c["cause"] == "pre_tension")
+              for r in (full, study)]
+    assert chosen[1]["intervals"] == chosen[0]["intervals"]
+    assert chosen[1]["intervals"]["lambda0"]["lower"] < 1.09 < chosen[1]["intervals"]["lambda0"]["upper"]
+    with pytest.raises(ValueError, match="'chosen', 'all' or 'cause'"):
+        Settings(intervals="none")
+
+
 def test_one_probe_only_has_no_holdout():
     spaces = toy_spaces(kinds=("strain_stiffening",))
     data = _toy_data(0.03, 0.02, None, "none", 2.0, 4, probes=(6.0,))

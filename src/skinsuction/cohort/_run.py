@@ -96,8 +96,8 @@ def run_study(path, out_dir, *, space_dir=None,
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     space, entries = _measurements(path, space_dir, space)
-    ray_spaces, pairs, settings = (_diagnosis(space_dir, ray_spaces, diagnosis_settings, level)
-                                   if diagnose else (None, None, None))
+    ray_spaces, pairs, settings = (_diagnosis(space_dir, ray_spaces, diagnosis_settings, level,
+                                              reports) if diagnose else (None, None, None))
     checkpoint = _checkpoint(out, resume, progress, space=str(space_dir),
                              space_sha256=space.info.get("sha256"),
                              ray_spaces=sorted(ray_spaces or ()), pairs=sorted(pairs or ()),
@@ -172,9 +172,10 @@ def _measurements(path, space_dir, space) -> tuple:
                            range_note=space.range_note(names))
 
 
-def _diagnosis(space_dir, ray_spaces, diagnosis_settings, level) -> tuple:
+def _diagnosis(space_dir, ray_spaces, diagnosis_settings, level, reports) -> tuple:
     """The ray spaces, the pair spaces that go with them and the settings of the study's
-    diagnoses."""
+    diagnoses (the neo-Hookean intervals only for the reports: a row has the
+    identification's)."""
     from skinsuction.diagnose import Settings
     from skinsuction.space import BASELINE, pairs_for, read_ray_spaces
 
@@ -183,6 +184,7 @@ def _diagnosis(space_dir, ray_spaces, diagnosis_settings, level) -> tuple:
     # the study's default: one window focusing run per fit, no holdout (seconds saved
     # per measurement); any decision or fit key of the configuration overrides
     settings = Settings.from_config(None, {"holdout": False, "repeats": 1,
+                                           "intervals": "chosen" if reports else "cause",
                                            **(diagnosis_settings or {})}, level=level)
     return ray_spaces, pairs, settings
 

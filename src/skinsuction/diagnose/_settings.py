@@ -42,10 +42,12 @@ class Settings:
         Seed of the window focusing runs (>= 0).
     level : float
         Confidence level of the profile-likelihood intervals of every fit.
-    intervals : {"chosen", "all"}
+    intervals : {"chosen", "all", "cause"}
         Intervals of the baseline and of the chosen cause (or of the model a
         ``beyond_space`` verdict stands on), or of every candidate (about 1 s of
-        CPU each on the default space).
+        CPU each on the default space), or of the chosen cause alone (a study's
+        rows: X1d and X1h have the identification's intervals, and the
+        baseline's, with a thickness nuisance, were a third of a ramp's CPU).
     window_focusing : dict
         N, Nb, C, max_iter.
     space_error : bool
@@ -108,8 +110,9 @@ class Settings:
             raise ValueError("model_error_um must be >= 0")
         if int(self.seed) < 0:
             raise ValueError(f"seed must be >= 0, got {self.seed}")
-        if self.intervals not in ("chosen", "all"):
-            raise ValueError(f"intervals must be 'chosen' or 'all', got {self.intervals!r}")
+        if self.intervals not in ("chosen", "all", "cause"):
+            raise ValueError(f"intervals must be 'chosen', 'all' or 'cause', got "
+                             f"{self.intervals!r}")
         if not 0.5 <= self.level < 1:
             raise ValueError(f"level must lie in [0.5, 1), got {self.level}")
         if not isinstance(self.pattern_gate, bool):

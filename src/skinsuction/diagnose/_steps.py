@@ -243,7 +243,8 @@ def fit_baseline(run: Run) -> Baseline:
                        settings.alpha)
     b = bic(fit.chi2, fit.n_params, run.n_points)
     bounds = fit_bounds(space, run.fd, fit.theta)
-    ci = intervals_json(space, run.fd, fit.theta, run.noise, settings)
+    ci = (None if settings.intervals == "cause"
+          else intervals_json(space, run.fd, fit.theta, run.noise, settings))
     hold, hold_detail = run.holdout(space)
     return Baseline(space, fit, test, b, bounds, ci, hold, hold_detail)
 
