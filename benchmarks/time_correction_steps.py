@@ -1,6 +1,6 @@
 """The FE correction's time solves: graded steps against a step at every sample.
 
-    python benchmarks/time_correction_steps.py [--rate-hz 100]
+    python benchmarks/time_correction_steps.py [--rate-hz 100] [--try FIRST GROWTH LARGEST]
 
 Every mode-1 fit is corrected by FE time solves at the fit
 (:func:`skinsuction.identify.fe_corrected_fit`, two per curve by default). A
@@ -11,7 +11,7 @@ break (1 ms, growing by 1.5, at most 0.15 s; before 29 November 2026 by 1.25 to
 breaks. For skins of the layers study and the published face values (creep with
 and without stiffening; 2 and 8 mm probes; mode 1, 3 s on / 2 s off, 2 cycles),
 prints the steps, the CPU of each solve and the largest difference at the
-samples, for both gradings. Asserts nothing.
+samples, for both gradings (and a grading to try, ``--try``). Asserts nothing.
 """
 
 from __future__ import annotations
@@ -37,6 +37,8 @@ PREVIOUS_GRADING = (1e-3, 1.25, 0.1)
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--rate-hz", type=float, default=100.0)
+    ap.add_argument("--try", dest="trial", type=float, nargs=3, default=None,
+                    metavar=("FIRST_S", "GROWTH", "LARGEST_S"), help="a grading to try too")
     args = ap.parse_args(argv)
 
     from skinsuction.evaluation import mode1_suction, virtual_skin_curve, write_time_csv
@@ -68,8 +70,13 @@ def main(argv=None):
     print(f"mode 1, 3 s on / 2 s off, 2 cycles, {args.rate_hz:g} Hz; reference mesh")
     gradings = {"graded": (FIRST_STEP_S, STEP_GROWTH, MAX_STEP_S),
                 "before": PREVIOUS_GRADING}
-    print("| skin | probe | steps: samples / graded / before | Newton iterations | CPU-s | "
-          "max |graded - samples| (µm): graded / before | Uf (µm) |")
+    if args.trial:
+        gradings["tried"] = tuple(args.trial)
+        print(f"tried: first step {args.trial[0]:g} s, growth {args.trial[1]:g}, "
+              f"largest {args.trial[2]:g} s")
+    names = " / ".join(gradings)
+    print(f"| skin | probe | steps: samples / {names} | Newton iterations | CPU-s | "
+          f"max |graded - samples| (µm): {names} | Uf (µm) |")
     print("|---|---|---|---|---|---|---|")
     for name, (x1d, x1h, x2d, g, tau, probe, level) in SKINS.items():
         skin = Skin.two_layer(x1d, x1h, x2d=x2d, spectrum=Prony(g, tau))
@@ -92,10 +99,10 @@ def main(argv=None):
         fine = (d.time_s[d.breaks][:, None] + GRADED_STEPS_S[None, :]).ravel()
         n_samples = np.unique(np.round(np.concatenate(
             [d.time_s, fine[fine < d.time_s[-1]]]), 9)).size
-        print(f"| {name} | {probe:g} mm | {n_samples} / {n[0]} / {n[1]} | "
+        print(f"| {name} | {probe:g} mm | {n_samples} / {' / '.join(map(str, n))} | "
               f"{' / '.join(map(str, newton))} | "
-              f"{cpu[0]:.1f} / {cpu[1]:.1f} / {cpu[2]:.1f} | {diff[0]:.3f} / {diff[1]:.3f} | "
-              f"{1e3 * ref.max():.0f} |")
+              f"{' / '.join(f'{c:.1f}' for c in cpu)} | "
+              f"{' / '.join(f'{x:.3f}' for x in diff)} | {1e3 * ref.max():.0f} |")
     return 0
 
 
