@@ -177,31 +177,36 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
     for key, sd in sds.items():
         lo, c_lo = fit_at(geometry.shifted(key, -sd))
         hi, c_hi = fit_at(geometry.shifted(key, sd))
-        d = (np.log(hi) - np.log(lo)) / 2  # d log X per sd
-        if sigma_mm > 0:
-            k = max((c_hi - 2 * c0 + c_lo) / sd ** 2, 0.0)
-            g = (c_hi - c_lo) / (2 * sd)
-            post_sd = 1.0 / math.sqrt(1.0 / sd ** 2 + k / 2)
-            preferred = getattr(geometry, key) - g / (k + 2 / sd ** 2)
-            # the rays resolve a thickness to 0.01 mm (the rays on demand round to it):
-            # a posterior sd below that is the rounding's
-            post_sd = max(post_sd, THICKNESS_RESOLUTION_MM)
-        else:
-            post_sd, preferred = sd, None
         name = {"t_d": "dermis_thickness", "t_h": "hypodermis_thickness"}[key]
-        out[name] = {
-            "sd_mm": sd, "posterior_sd_mm": post_sd,
-            "preferred_by_the_curves_mm": preferred,
-            "chi2_slope_per_mm": float(g) if sigma_mm > 0 else None,
-            "d_log_X1d_per_sd": float(d[0]), "d_log_X1h_per_sd": float(d[1]),
-            "X1d_change_percent_per_sd": float(100 * np.expm1(d[0])),
-            "X1h_change_percent_per_sd": float(100 * np.expm1(d[1])),
-            "log_shift": [float(abs(d[0]) * post_sd / sd), float(abs(d[1]) * post_sd / sd)]}
+        out[name] = _thickness_record(getattr(geometry, key), sd, (lo, hi), (c_lo, c0, c_hi),
+                                      sigma_mm > 0)
     est0, est = est, _at_preferred(setup, fit_at, out, est, c0)
     setup.warnings.extend(f"geometry (thickness +- 1 sd): {n}" for n in notes_seen)
     if intervals is not None:
         _widen(intervals, out, est0, est, level)
     return out, est
+
+
+def _thickness_record(t0, sd, moduli, chi2, with_noise: bool) -> dict:
+    """One thickness's record from the fits at ``t0 -+ sd`` (``moduli``: their X1d, X1h)
+    and the chi^2 at ``t0 - sd, t0, t0 + sd``: the quadratic through them and the prior."""
+    lo, hi = moduli
+    c_lo, c0, c_hi = chi2
+    d = (np.log(hi) - np.log(lo)) / 2  # d log X per sd
+    post_sd, preferred, g = sd, None, None
+    if with_noise:
+        k = max((c_hi - 2 * c0 + c_lo) / sd ** 2, 0.0)
+        g = (c_hi - c_lo) / (2 * sd)
+        # the rays resolve a thickness to 0.01 mm (the rays on demand round to it): a
+        # posterior sd below that is the rounding's
+        post_sd = max(1.0 / math.sqrt(1.0 / sd ** 2 + k / 2), THICKNESS_RESOLUTION_MM)
+        preferred = t0 - g / (k + 2 / sd ** 2)
+    return {"sd_mm": sd, "posterior_sd_mm": post_sd, "preferred_by_the_curves_mm": preferred,
+            "chi2_slope_per_mm": None if g is None else float(g),
+            "d_log_X1d_per_sd": float(d[0]), "d_log_X1h_per_sd": float(d[1]),
+            "X1d_change_percent_per_sd": float(100 * np.expm1(d[0])),
+            "X1h_change_percent_per_sd": float(100 * np.expm1(d[1])),
+            "log_shift": [float(abs(d[0]) * post_sd / sd), float(abs(d[1]) * post_sd / sd)]}
 
 
 def _widen(intervals, out, est0, est, level) -> None:
