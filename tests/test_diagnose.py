@@ -285,6 +285,32 @@ def test_rays_combined_to_the_last_load_read_are_the_full_rays_cut_there():
         assert np.isfinite(got).sum() > 0.5 * got.size
 
 
+def test_curves_read_at_once_are_each_interpolants_own_bit_for_bit():
+    # a fit with a given thickness reads its model and the brackets at the same X1d:
+    # their load cells are found once, the values are each interpolant's own
+    from skinsuction.space import read_at_once
+
+    spaces = toy_spaces()
+    s = spaces["strain_stiffening"]
+    rays = {q: a.copy() for q, a in s.deflection_mm.items()}
+    rays[6.0][:, 0, 12:] = np.nan  # stopped rays: the rules of read() too
+    stopped = RaySpace(s.cause, s.spec, s.coordinates, rays, {})
+    p = np.arange(0.0, 101.0, 2.0)
+    f3, g3 = RayInterpolant(s, 6.0, p), RayInterpolant(stopped, 6.0, p)
+    f2 = RayInterpolant(spaces["neo_hookean"], 6.0, p)
+    other = RayInterpolant(spaces["neo_hookean"], 6.0, p[:20])  # other pressures
+    rng = np.random.default_rng(2)
+    theta = np.column_stack([rng.uniform(f3.lower[0], f3.upper[0], 300),
+                             rng.uniform(f3.lower[1], f3.upper[1], 300),
+                             rng.uniform(f3.lower[2], f3.upper[2], 300)])
+    calls = [(f3, theta), (g3, theta), (f2, theta[:, :2]), (other, theta[:, :2])]
+    got = read_at_once(calls)
+    for (f, t), m in zip(calls, got, strict=True):
+        np.testing.assert_array_equal(m, f(t))
+    assert got[3].shape == (300, 20)
+    assert np.isfinite(got[1]).sum() > 0.5 * got[1].size
+
+
 def test_ray_space_round_trips_through_parquet(tmp_path):
     s = toy_spaces()["pre_tension"]
     s.metadata = {"ray_spec": s.spec.to_dict(), "cause": s.cause.to_dict()}

@@ -24,7 +24,7 @@ from skinsuction.identify import Chi2Objective, bound_flags, profile_intervals, 
 from skinsuction.identify.measured_fit import (decorrelate, discretisation_error_rms,
                                                space_error_direction)
 
-from skinsuction.space import RayInterpolant, RaySpace, interpolant, space_causes
+from skinsuction.space import RayInterpolant, RaySpace, interpolant, read_at_once, space_causes
 
 __all__ = ["FitData", "Fit", "ModelCurves", "fit_model", "fit_bounds", "fit_intervals",
            "with_space_error", "PAPER_WF", "DIAGNOSIS_POLISH"]
@@ -134,17 +134,24 @@ class ModelCurves:
     def __call__(self, theta) -> dict:
         theta = np.asarray(theta, dtype=float)
         own = theta[:, :self.n_model]
-        model = {p: f(own) for p, f in self.interp.items()}
-        out = dict(model)
-        for j, brackets in enumerate(self._brackets):
-            delta = theta[:, self.n_model + j][:, None]
-            n = self.nuisance[j]
-            # a cause's own brackets are read at its coordinate too; brackets centred
-            # on this model's own space have its curve as their centre
-            at = own if n.center.cause is not None else own[:, :2]
-            for p, (center, minus, plus) in brackets.items():
-                m0 = model[p] if n.center is self.space else center(at)
-                lo, hi = minus(at), plus(at)
+        out = {}
+        for p, f in self.interp.items():
+            # the model and every bracket are read at the same X1d: at once
+            calls = [(f, own)]
+            for n, brackets in zip(self.nuisance, self._brackets):
+                # a cause's own brackets are read at its coordinate too; brackets
+                # centred on this model's own space have its curve as their centre
+                at = own if n.center.cause is not None else own[:, :2]
+                center, minus, plus = brackets[p]
+                calls += [(minus, at), (plus, at)] + (
+                    [] if n.center is self.space else [(center, at)])
+            curves = iter(read_at_once(calls))
+            model = next(curves)
+            out[p] = model
+            for j, n in enumerate(self.nuisance):
+                delta = theta[:, self.n_model + j][:, None]
+                lo, hi = next(curves), next(curves)
+                m0 = model if n.center is self.space else next(curves)
                 out[p] = out[p] + delta * (hi - lo) / 2 + delta ** 2 * (hi + lo - 2 * m0) / 2
         return out
 

@@ -91,7 +91,7 @@ from ._load_axis import LoadAxis
 from ._coordinates import SpaceCoordinates, load, reference_pressure, similar_length
 from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
 from ._open import GEOMETRIES_KEPT, LoadedSpace, ProbeSpace, load_space
-from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant
+from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant, read_at_once
 from ._pair_interpolate import PairRayInterpolant, interpolant
 from ._pairs import (
     PAIRS_FOLDER,
@@ -217,7 +217,7 @@ __all__ = [
     "RaySpace", "RaySpec", "SpaceFileError", "SpaceMissingError", "assemble_ray_space",
     "build_ray_spaces", "bundle_id", "compute_bundle", "compute_ray", "coverage_frontier",
     "parse_ray_id", "ray_bundles", "ray_id", "rays_of", "read_ray_space", "read_ray_spaces",
-    "NeoHookeanSlice", "RayInterpolant", "TabulatedInterpolant",
+    "NeoHookeanSlice", "RayInterpolant", "TabulatedInterpolant", "read_at_once",
     # every probe and the subject's layers
     "DEFAULT_LAYERS_MM", "Geometry", "GeometryOutsideSpace", "OnDemandRays",
     "default_cache_dir", "spaces_at", "fit_reach_mm", "FIT_REACH", "ThicknessNuisance", "window_nodes",

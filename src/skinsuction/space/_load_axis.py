@@ -115,12 +115,29 @@ class LoadAxis:
         ...             equal_nan=True)
         True
         """
+        return self.evaluate_at(log_m, self.stencils_of(q, log_m.shape))
+
+    def stencils_of(self, q, shape) -> dict:
+        """The loads' cells and offsets, for :meth:`evaluate_at` on any rays of ``shape``.
+
+        Rays read at the same loads (the model's curve and its thickness brackets at the
+        same X1d) share this part of :meth:`evaluate`, about half its cost.
+
+        Parameters
+        ----------
+        q : ndarray, shape (N, u)
+        shape : (int, int)
+            ``log_m.shape`` of the rays to be read, (N, L).
+
+        Returns
+        -------
+        dict
+        """
         q = np.asarray(q, dtype=float)
-        n_rows, width = log_m.shape
+        n_rows, width = shape
         per_row = q.size // max(n_rows, 1)
         nodes, m = self._log.nodes, self._log.m
         cells = min(len(self._cell_start), width - m + 1)
-        out = np.full(q.size, np.nan)
         flat = q.reshape(-1)
         with np.errstate(divide="ignore", invalid="ignore"):
             x = np.log(flat)
@@ -130,12 +147,23 @@ class LoadAxis:
         by_rules = np.ones(q.size, bool)  # the loads left to read()'s rules
         by_rules[here] = False
         by_rules[x > nodes[-1]] = False  # beyond the last load: NaN
+        c, rows = cell[here], here // per_row
+        return {"shape": q.shape, "width": width, "per_row": per_row, "cells": cells,
+                "flat": flat, "x": x, "here": here, "by_rules": by_rules, "c": c,
+                "rows": rows, "at": (rows * cells + c) * m, "dx": x[here] - nodes[c]}
+
+    def evaluate_at(self, log_m, st: dict) -> np.ndarray:
+        """:meth:`evaluate` of ``log_m`` at the loads of :meth:`stencils_of`."""
+        if log_m.shape[1] != st["width"]:
+            raise ValueError(f"rays of {log_m.shape[1]} loads, stencils of {st['width']}")
+        nodes, m, cells = self._log.nodes, self._log.m, st["cells"]
+        here, x, c, rows, dx = st["here"], st["x"], st["c"], st["rows"], st["dx"]
+        out = np.full(st["flat"].size, np.nan)
+        by_rules = st["by_rules"].copy()
         if here.size:
             stencils = self._cell_start[:cells, None] + np.arange(m)
             coef = np.einsum("kij,nkj->nki", self._to_monomials[:cells], log_m[:, stencils])
-            c, rows = cell[here], here // per_row
-            at = (rows * cells + c) * m
-            dx = x[here] - nodes[c]
+            at = st["at"]
             f = coef.reshape(-1)
             v = f.take(at + m - 1)
             for k in range(m - 2, -1, -1):
@@ -150,8 +178,8 @@ class LoadAxis:
             by_rules[here[bad[~sure]]] = True
         rest = np.flatnonzero(by_rules)
         if rest.size:
-            out[rest] = self._read_flat(log_m, rest // per_row, flat[rest])
-        return out.reshape(q.shape)
+            out[rest] = self._read_flat(log_m, rest // st["per_row"], st["flat"][rest])
+        return out.reshape(st["shape"])
 
     def read(self, log_m, weights) -> np.ndarray:
         """M at the loads of ``weights`` off the rays ``log_m``.

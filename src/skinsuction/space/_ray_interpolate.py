@@ -21,7 +21,7 @@ from ._lagrange import LagrangeAxis
 from ._load_axis import LoadAxis
 from ._ray_space import RaySpace
 
-__all__ = ["RayInterpolant", "NeoHookeanSlice", "TabulatedInterpolant"]
+__all__ = ["RayInterpolant", "NeoHookeanSlice", "TabulatedInterpolant", "read_at_once"]
 
 
 def _alternative_starts(axis: LagrangeAxis, x, centred):
@@ -226,6 +226,48 @@ class RayInterpolant:
             return vals
         out[...] = vals
         return out
+
+
+def read_at_once(calls) -> list:
+    """The curves of several ray interpolants at candidates of the same X1d, at once.
+
+    A fit with a given thickness reads its model's curve and the thickness's
+    brackets (the rays at -1 and +1 sd) at the same X1d, so at the same loads
+    p X1d_ref / X1d: their cells along the load are found once
+    (:meth:`LoadAxis.stencils_of`), for each the same values as its own call.
+
+    Parameters
+    ----------
+    calls : list of (interpolant, theta)
+        Each theta (N, d) of its interpolant, all with the same first column
+        (log10 X1d). An interpolant of other pressures or loads than the first
+        (or not a :class:`RayInterpolant`) is read by its own call.
+
+    Returns
+    -------
+    list of ndarray (N, u)
+    """
+    first, theta0 = calls[0]
+    if not isinstance(first, RayInterpolant):
+        return [f(theta) for f, theta in calls]
+    theta0 = np.atleast_2d(np.asarray(theta0, dtype=float))
+    q = reference_pressure(first.pressure_mbar[None, :], 10.0 ** theta0[:, 0][:, None],
+                           first.x1d_ref)
+    loads = first._load.loads_for(q)
+    stencils, out = None, []
+    for f, theta in calls:
+        theta = np.atleast_2d(np.asarray(theta, dtype=float))
+        if not (isinstance(f, RayInterpolant) and f.x1d_ref == first.x1d_ref
+                and np.array_equal(f.pressure_mbar, first.pressure_mbar)
+                and np.array_equal(f._load.loads, first._load.loads)
+                and theta.shape[1] == f.d and np.array_equal(theta[:, 0], theta0[:, 0])):
+            out.append(f(theta))
+            continue
+        g = f.combined_logs(theta, loads=loads)
+        if stencils is None:
+            stencils = first._load.stencils_of(q, g.shape)
+        out.append(f._load.evaluate_at(g, stencils))
+    return out
 
 
 class NeoHookeanSlice:
