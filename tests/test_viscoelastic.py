@@ -249,3 +249,21 @@ def test_bad_histories_are_refused():
         simulate_history(Skin.two_layer(X1D, X1H, spectrum=SPECTRUM), [0, 1, 1], [0, 10, 10], mesh=COARSE)
     with pytest.raises(ParameterError):
         simulate_history(Skin.two_layer(X1D, X1H, spectrum=SPECTRUM), [0, 1], [5, 10], mesh=COARSE)
+
+
+def test_a_time_solve_keeps_its_tangent_from_step_to_step():
+    # the last step's tangent starts the next, and one of this step's serves while
+    # it contracts: one factorisation a step (2.2 when every step began afresh and
+    # refactorised from its 3rd iteration), with the history of a tolerance 10^4
+    # times tighter. A soft dermis, the study's mode 1 and time steps
+    skin = Skin.two_layer(0.02, 6e-4, spectrum=Prony([0.4, 0.6], [0.05, 2.0]))
+    hist = mode1_history(150, on_s=1.0, off_s=0.5, cycles=2, growth=1.5, max_step_s=0.15)
+    model = ViscoelasticSuctionTest(skin, 2.0, mesh=COARSE)
+    factorised, tangent = [], model.model._tangent
+    model.model._tangent = lambda: factorised.append(1) or tangent()
+    h = model.run(hist.times_s, hist.pressure_mbar)
+    tight = ViscoelasticSuctionTest(skin, 2.0, mesh=COARSE).run(hist.times_s, hist.pressure_mbar,
+                                                                tol=1e-10)
+    assert h.converged and tight.converged
+    assert len(factorised) <= 1.25 * h.steps, (len(factorised), h.steps)
+    assert rel_error(h.deflection_mm, tight.deflection_mm) < 1e-6

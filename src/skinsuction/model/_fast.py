@@ -220,6 +220,9 @@ class FastAssembly:
         f = self._components(u)
         with np.errstate(invalid="ignore", divide="ignore"):
             P, _ = material_response(f, self.x1, self.x2, self.bulk, self.f0, tangent=False)
+            added = self._added_stress(f, tangent=False)
+        if added is not None:
+            P = P + added[0]
         re = (self.Bw @ P.T[:, :, None]).reshape(-1, self.nq, self.B.shape[1]).sum(axis=1)
         r = np.bincount(self.eldofs.ravel(), re.ravel(), minlength=self.ndof)
         if pressure != 0.0 and len(self.suction_edges):
@@ -240,6 +243,9 @@ class FastAssembly:
         f = self._components(u)
         P, A = material_response(f, self.x1, self.x2, self.bulk, self.f0)
         A = np.ascontiguousarray(A.transpose(2, 0, 1))  # (c q, 5, 5)
+        added = self._added_stress(f, tangent=True)
+        if added is not None:
+            A += added[1]
         nx = self.B.shape[1]
         Ke = ((self.Bw @ A) @ self.BT).reshape(-1, self.nq, nx, nx).sum(axis=1)
         # the solid's diagonal at the wall points' radial DOFs, for the penalty
@@ -257,6 +263,11 @@ class FastAssembly:
             active = (gap < 0) & (slots >= 0)
             np.add.at(data, slots[active], self.wall_multiplier)
         return data
+
+    def _added_stress(self, f, tangent):
+        """A stress added to the layers' law at the Gauss points: ``(P (5, c q), A (c q,
+        5, 5) or None)``, or None (none here; the viscous branches' history adds one)."""
+        return None
 
     def matrix(self, data):
         """The tangent as a CSC matrix in the kept order."""

@@ -306,10 +306,11 @@ class SuctionTest:
         return lu, iterations
 
     def newton(self, lu, tol, maxiter, f, floor=0.0, xtol=1e-9, stall_after=8,
-               stall_window=4):
+               stall_window=4, keep_fresh=False):
         """Newton's method at the current load, in place (:func:`newton`, whose
         parameters these are); returns the tangent, the iterations and the residual."""
-        return newton(self, lu, tol, maxiter, f, floor, xtol, stall_after, stall_window)
+        return newton(self, lu, tol, maxiter, f, floor, xtol, stall_after, stall_window,
+                      keep_fresh)
 
     def run(
         self,
