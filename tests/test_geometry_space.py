@@ -274,7 +274,7 @@ def test_a_space_unpacked_into_job_files_assembles_again_beside_a_job_solved_afr
     files (checked against fresh FE solves) and assemble with the new jobs' files."""
     from skinsuction.space import unpack_geometry_space
     from skinsuction.space._geometry_space import _write_compact
-    from skinsuction.space._storage import _read_parquet
+    from skinsuction.space._storage import _read_parquet, _write_parquet
 
     folder, space = cause_space
     cause, g, out = _pre_tension(), space.grid, tmp_path / "rays"
@@ -282,11 +282,26 @@ def test_a_space_unpacked_into_job_files_assembles_again_beside_a_job_solved_afr
     fresh = list(jobs)[2]
     compute_bundle(g.ray_ids(SPEC, g.td_nodes[2], cause), out / f"{fresh}.parquet",
                    SPEC.pressures_mbar, SPEC.mesh, list(SPEC.fallback),
-                   metadata={"source_hash": {"model": "today"}})
+                   metadata={"source_hash": {"model": "yesterday"}})
+    # solved by yesterday's code, carried over from a build cut short: a tampered
+    # copy is refused, the file itself restamped once a ray solved afresh equals it
+    frame, meta = _read_parquet(out / f"{fresh}.parquet")
+    tampered = tmp_path / "tampered"
+    tampered.mkdir()
+    _write_parquet(frame.assign(deflection_mm=frame["deflection_mm"] * 1.001),
+                   tampered / f"{fresh}.parquet", meta)
+    with pytest.raises(ValueError, match="solved afresh differs"):
+        unpack_geometry_space(folder / "pre_tension.parquet", {fresh: jobs[fresh]}, tampered,
+                              cause=cause, source_hash="today", check=1)
     done = unpack_geometry_space(folder / "pre_tension.parquet",
                                  {**jobs, "pre_tension__td9": (9.0, list(g.th_nodes))}, out,
                                  cause=cause, source_hash="today", check=1)
-    assert done[fresh] == "kept" and done["pre_tension__td9"] == "not in the file"
+    assert done[fresh] == "restamped" and done["pre_tension__td9"] == "not in the file"
+    again, meta = _read_parquet(out / f"{fresh}.parquet")
+    assert again.equals(frame) and meta["source_hash"] == {"model": "today"}
+    assert meta["restamped_from"]["source_hash"] == "yesterday"
+    assert unpack_geometry_space(folder / "pre_tension.parquet", {fresh: jobs[fresh]}, out,
+                                 cause=cause, source_hash="today")[fresh] == "kept"
     assert sorted(k for k, v in done.items() if v == "written") == sorted(set(jobs) - {fresh})
     again = assemble_geometry_space(sorted(out.glob("*.parquet")), tmp_path / "again.parquet",
                                     SPEC, g, cause=cause)

@@ -135,7 +135,11 @@ def unpack_geometry_space(space_file, jobs: dict, out_dir, *, cause=None,
     :func:`compute_bundle` writes it, once ``check`` of its rays (drawn with ``seed``),
     solved afresh, equal the file's to the 6e-8 of M it stores: the rays are today's
     FE model's, and the job file records today's FE code hash.  Their CPU was counted
-    in the file they come from (``seconds`` None).
+    in the file they come from (``seconds`` None).  A job file already there (a build
+    cut short, its files carried to another machine) is kept; if another FE code
+    solved it, it is restamped with today's hash once ``check`` of its own rays solved
+    afresh equal it (``restamped_from`` records the old hash and the rays checked), so
+    that it assembles beside today's files; else the build stops, naming the ray.
 
     Parameters
     ----------
@@ -155,7 +159,8 @@ def unpack_geometry_space(space_file, jobs: dict, out_dir, *, cause=None,
     Returns
     -------
     dict
-        Job name -> "written", "kept" (its file existed) or "not in the file".
+        Job name -> "written", "kept" (its file existed), "restamped" (its file existed,
+        solved by other FE code, checked) or "not in the file".
 
     Raises
     ------
@@ -190,8 +195,11 @@ def unpack_geometry_space(space_file, jobs: dict, out_dir, *, cause=None,
     for name, (td, ths) in jobs.items():
         path = out_dir / f"{name}.parquet"
         job_ids = space.grid.ray_ids(spec, td, cause, ths)
-        if path.exists() or not all(rid in rows for rid in job_ids):
-            done[name] = "kept" if path.exists() else "not in the file"
+        if path.exists():
+            done[name] = _restamp(path, source_hash, spec, check, rng)
+            continue
+        if not all(rid in rows for rid in job_ids):
+            done[name] = "not in the file"
             continue
         checked = [job_ids[k] for k in rng.choice(len(job_ids), size=min(check, len(job_ids)),
                                                   replace=False)]
@@ -212,6 +220,32 @@ def unpack_geometry_space(space_file, jobs: dict, out_dir, *, cause=None,
             "unpacked_from": {**source, "checked_afresh": checked}})
         done[name] = "written"
     return done
+
+
+def _restamp(path, source_hash, spec, check, rng) -> str:
+    """A job file solved by other FE code: "restamped" with today's hash once ``check``
+    of its rays solved afresh equal its own (a build resumed after a change of the code
+    that leaves the rays as they were); "kept" if it has today's hash already."""
+    import numpy as np
+
+    from ._storage import _read_parquet, _write_parquet
+
+    frame, meta = _read_parquet(path)
+    old = (meta.get("source_hash") or {}).get("model")
+    if old == source_hash:
+        return "kept"
+    ids = list(dict.fromkeys(frame["ray_id"]))
+    checked = [ids[k] for k in rng.choice(len(ids), size=min(check, len(ids)), replace=False)]
+    for rid in checked:
+        rows = frame[frame["ray_id"] == rid].sort_values("pressure_mbar")
+        if not np.array_equal(rows["pressure_mbar"].to_numpy(float),
+                              np.asarray(spec.pressures_mbar, float)):
+            raise ValueError(f"{path}: ray {rid} is not on the space's pressures")
+        _same_as_fresh(rid, rows["deflection_mm"].to_numpy(float), spec, path)
+    _write_parquet(frame, path, {**meta, "source_hash": {"model": source_hash},
+                                 "restamped_from": {"source_hash": old,
+                                                    "checked_afresh": checked}})
+    return "restamped"
 
 
 def _same_as_fresh(rid, stored, spec, space_file) -> None:
