@@ -98,9 +98,9 @@ def ship_geometry_space(built_file, dest=None, *, build_command: str | None = No
     space = read_geometry_space(built_file)
     _, meta = _read_parquet(built_file)
     out.mkdir(parents=True, exist_ok=True)
+    git = git_info(repo)  # before the copy, which is itself a change of the checkout
     with atomic_output(out / name) as tmp:
         shutil.copyfile(built_file, tmp)
-    git = git_info(repo)
     record = (shipped_provenance(out) if (out / PROVENANCE_FILE).is_file() else None) or {}
     files = dict(record.get("files") or {})
     files[name] = jsonable({
