@@ -22,6 +22,7 @@ import argparse
 import math
 import time
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -112,6 +113,7 @@ def main(argv=None):
     df = pd.DataFrame(rows)
     df["band"] = df["probe_mm"].map(_band)
     loads = df.pop("load_errors")
+    Path(a.out).parent.mkdir(parents=True, exist_ok=True)  # a fresh checkout has none
     df.to_csv(a.out, index=False)
     print(f"{a.cause}: {len(jobs)} geometries, {len(df)} rays, {time.time() - w0:.0f} s wall")
 
