@@ -186,7 +186,8 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
     est0, est = est, _at_preferred(setup, fit_at, out, est, c0)
     setup.warnings.extend(f"geometry (thickness +- 1 sd): {n}" for n in notes_seen)
     if intervals is not None:
-        edge = _tail_fits(setup, fit_at, sds)
+        edge = _profile_fits(setup, fit_at, sds, points,
+                             float(intervals.get("misfit_scale") or 1.0))
         profiled = _profiled(intervals, points, geometry, sds, est0)
         _widen(intervals, out, est0, est, level)
         _widen_to(intervals, profiled, edge)
@@ -236,27 +237,63 @@ def _widen(intervals, out, est0, est, level) -> None:
         "the fit at each thickness +- 1 sd, a Gaussian prior on the thickness)"]
 
 
-#: The profile over a given thickness reaches this far (in sd of the given one) beyond
-#: the fits at +-1 sd: the chi^2 of the curves in a thin dermis is often flat on one side
-#: and steep on the other, which the quadratic through +-1 sd reads as a sharp minimum.
+#: The profile over the given thicknesses reaches this far (in sd of the given ones)
+#: beyond the fits at +-1 sd: the chi^2 of the curves in a thin dermis is often flat on
+#: one side and steep on the other, which the quadratic through +-1 sd reads as a sharp
+#: minimum; and with both thicknesses given, a thicker dermis over a thinner hypodermis
+#: can fit as well as the given pair (a valley across the axes).
 TAIL_SD = (2.0, 3.0)
 
 
-def _tail_fits(setup, fit_at, sds) -> list:
-    """The fits at +-2 and +-3 sd of each given thickness, read off the geometry spaces
-    whatever their error estimate (no FE ray: a tail of the likelihood needs no 0.2 %);
-    where the grid does not hold one, none: the notes of those left out."""
+def _profile_fits(setup, fit_at, sds, points, scale) -> list:
+    """More fits of the posterior over the given thicknesses, read off the geometry
+    spaces whatever their error estimate (no FE ray: a likelihood's tail needs no
+    0.2 %): with one thickness given, at +-2 and +-3 sd; with both, at the four
+    corners of +-1 sd and then at 2 and 3 sd either way along the valley of the
+    quadratic through the nine fits, from the best of them.  Returns the
+    thicknesses left out, beyond the simulated geometry."""
     geometry, space, probes, edge = setup.geometry, setup.space, setup.probes, []
-    for key, sd in sds.items():
-        for s in (-TAIL_SD[1], -TAIL_SD[0], TAIL_SD[0], TAIL_SD[1]):
-            g = geometry.shifted(key, s * sd)
-            t = getattr(g, key)
-            moved = space.read_only_at(g, probes) if t > 0 else None
-            if moved is None:
-                edge.append(f"{key} = {t:.3g} mm")
-                continue
+    keys = list(sds)
+
+    def at(s):  # the fit at s sd (a vector over ``keys``), if the grid holds it
+        g = geometry
+        for k, v in zip(keys, s):
+            g = g.shifted(k, v * sds[k])
+        moved = (space.read_only_at(g, probes)
+                 if all(getattr(g, k) > 0 for k in keys) else None)
+        if moved is None:
+            edge.append(", ".join(f"{k} = {getattr(g, k):.3g} mm" for k in keys))
+        else:
             fit_at(g, moved)
+
+    if len(keys) == 1:
+        for v in (-TAIL_SD[1], -TAIL_SD[0], TAIL_SD[0], TAIL_SD[1]):
+            at([v])
+        return edge
+    for corner in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
+        at(corner)
+    s, d = _posterior_samples(points, geometry, sds, scale)
+    near = np.all(np.abs(s) <= 1 + 1e-9, axis=1) & np.isfinite(d)
+    if near.sum() < 6:
+        return edge
+    x, y = s[near].T
+    A = np.column_stack([x * x, y * y, x * y, x, y, np.ones_like(x)])
+    a, b, c = np.linalg.lstsq(A, d[near], rcond=None)[0][:3]
+    w, v = np.linalg.eigh(np.array([[a, c / 2], [c / 2, b]]))
+    valley = v[:, int(np.argmin(w))]
+    best = s[near][int(np.argmin(d[near]))]
+    for t in (-TAIL_SD[1], -TAIL_SD[0], TAIL_SD[0], TAIL_SD[1]):
+        at(best + t * valley)
     return edge
+
+
+def _posterior_samples(points, geometry, sds, scale):
+    """``(s, D)``: each fit's thicknesses in sd of the given ones, and ``-2 log`` of the
+    posterior there (its chi^2 over the misfit scale plus the Gaussian priors)."""
+    s = np.array([[(getattr(g, k) - getattr(geometry, k)) / sd for k, sd in sds.items()]
+                  for g, _, _ in points], dtype=float).reshape(len(points), len(sds))
+    d = np.array([c for _, _, c in points], dtype=float) / scale + np.sum(s * s, axis=1)
+    return s, d
 
 
 def _profiled(intervals, points, geometry, sds, est0) -> dict:
@@ -271,9 +308,8 @@ def _profiled(intervals, points, geometry, sds, est0) -> dict:
     q = float(intervals.get("delta_chi2_threshold") or 0.0) / scale
     if not points or q <= 0:
         return {}
-    rise = [c / scale + sum(((getattr(g, k) - getattr(geometry, k)) / sd) ** 2
-                            for k, sd in sds.items()) for g, _, c in points]
-    least = min(r for r in rise if math.isfinite(r))
+    rise = _posterior_samples(points, geometry, sds, scale)[1]
+    least = float(np.nanmin(rise))
     out = {}
     for i, name in enumerate(("X1d", "X1h")):
         iv = intervals.get(name)
@@ -306,8 +342,8 @@ def _widen_to(intervals, profiled, edge) -> None:
         if hi is not None and iv["upper"] and hi > iv["upper"]:
             iv["upper"] = hi
     intervals["notes"] = list(intervals.get("notes", [])) + [
-        "and reach as far as the profile of the fits over each given thickness (at -3 to "
-        "+3 sd) takes them" + (f"; left out beyond the simulated geometry: {', '.join(edge)}"
+        "and reach as far as the profile of the fits over the given thicknesses (to 3 sd) "
+        "takes them" + (f"; left out beyond the simulated geometry: {', '.join(edge)}"
                                if edge else "")]
 
 
