@@ -477,3 +477,25 @@ def test_a_thickness_bracket_moves_the_centre_by_the_change_the_space_reads(tmp_
     solver.moved_rays(8.0, _layers(0.55, 2.17), _layers(0.45, 2.17), fe_centre, cause,
                       ratio_nodes=nodes)
     assert len(asked) == 1 and asked[0][1] == _layers(0.45, 2.17)
+
+
+def test_a_read_only_view_reads_what_the_grid_holds_and_solves_nothing(tmp_path):
+    """The tails of a thickness profile read rays whatever their error estimate: inside
+    the shipped grid none is solved (here one the default view would solve: its
+    estimate is above the tolerance), outside it there is no view."""
+    from skinsuction.measured import Geometry
+    from skinsuction.space import load_space
+    from skinsuction.space._shipped import default_space_dir
+
+    space = load_space(default_space_dir(), cache_dir=tmp_path / "cache")
+    g = Geometry(0.69, 2.17, given=("t_d", "t_h"))
+    layers = {"dermis.thickness": 0.69, "hypodermis.thickness": 2.17}
+    _, estimate = space.on_demand.read_rays(6.0, layers)
+    assert estimate > space.on_demand.tolerance
+    view = space.read_only_at(g, [2.0, 6.0])
+    read = view.probe(6.0)
+    assert view.on_demand.solved == 0 and space.on_demand.solved == 0
+    assert read is not None and view._geometry_key() != space.at(g)._geometry_key()
+    assert any("read off the geometry space" in n for n in view.notes([6.0]))
+    assert not any("solved" in n for n in view.notes([6.0]))
+    assert space.read_only_at(Geometry(0.2, 2.17, given=("t_d",)), [2.0, 6.0]) is None

@@ -153,8 +153,8 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
         return None, est
     sigma_mm = 1e-3 * float((noise or {}).get("sd_um") or 0.0)
 
-    def fit_at(g):
-        moved = space.at(g)
+    def fit_at(g, moved=None):
+        moved = space.at(g) if moved is None else moved
         spaces = {p: moved.probe(p) for p in probes}
         obj = make_objective(setup.objective, spaces, curves, probes, setup.alpha,
                              setup.data.path)
@@ -169,7 +169,10 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
         for n in moved.notes(probes):
             if n not in space.notes(probes) and n not in notes_seen:
                 notes_seen.append(n)
+        points.append((g, obj.to_moduli(th)[0], chi2))
         return obj.to_moduli(th)[0], chi2
+
+    points = []  # (geometry, moduli, chi2) of every fit: the profile over the thicknesses
 
     notes_seen = []
     _, c0 = fit_at(geometry)
@@ -183,7 +186,11 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
     est0, est = est, _at_preferred(setup, fit_at, out, est, c0)
     setup.warnings.extend(f"geometry (thickness +- 1 sd): {n}" for n in notes_seen)
     if intervals is not None:
+        edge = _profile_fits(setup, fit_at, sds, points,
+                             float(intervals.get("misfit_scale") or 1.0))
+        profiled = _profiled(intervals, points, geometry, sds, est0)
         _widen(intervals, out, est0, est, level)
+        _widen_to(intervals, profiled, edge)
     return out, est
 
 
@@ -228,6 +235,116 @@ def _widen(intervals, out, est0, est, level) -> None:
     intervals["notes"] = list(intervals.get("notes", [])) + [
         "the intervals include the sd of the given thicknesses (Laplace approximation: "
         "the fit at each thickness +- 1 sd, a Gaussian prior on the thickness)"]
+
+
+#: The profile over the given thicknesses reaches this far (in sd of the given ones)
+#: beyond the fits at +-1 sd: the chi^2 of the curves in a thin dermis is often flat on
+#: one side and steep on the other, which the quadratic through +-1 sd reads as a sharp
+#: minimum; and with both thicknesses given, a thicker dermis over a thinner hypodermis
+#: can fit as well as the given pair (a valley across the axes).
+TAIL_SD = (2.0, 3.0)
+
+
+def _profile_fits(setup, fit_at, sds, points, scale) -> list:
+    """More fits of the posterior over the given thicknesses, read off the geometry
+    spaces whatever their error estimate (no FE ray: a likelihood's tail needs no
+    0.2 %): with one thickness given, at +-2 and +-3 sd; with both, at the four
+    corners of +-1 sd and then at 2 and 3 sd either way along the valley of the
+    quadratic through the nine fits, from the best of them.  Returns the
+    thicknesses left out, beyond the simulated geometry."""
+    geometry, space, probes, edge = setup.geometry, setup.space, setup.probes, []
+    keys = list(sds)
+
+    def at(s):  # the fit at s sd (a vector over ``keys``), if the grid holds it
+        g = geometry
+        for k, v in zip(keys, s):
+            g = g.shifted(k, v * sds[k])
+        moved = (space.read_only_at(g, probes)
+                 if all(getattr(g, k) > 0 for k in keys) else None)
+        if moved is None:
+            edge.append(", ".join(f"{k} = {getattr(g, k):.3g} mm" for k in keys))
+        else:
+            fit_at(g, moved)
+
+    if len(keys) == 1:
+        for v in (-TAIL_SD[1], -TAIL_SD[0], TAIL_SD[0], TAIL_SD[1]):
+            at([v])
+        return edge
+    for corner in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
+        at(corner)
+    s, d = _posterior_samples(points, geometry, sds, scale)
+    near = np.all(np.abs(s) <= 1 + 1e-9, axis=1) & np.isfinite(d)
+    if near.sum() < 6:
+        return edge
+    x, y = s[near].T
+    A = np.column_stack([x * x, y * y, x * y, x, y, np.ones_like(x)])
+    a, b, c = np.linalg.lstsq(A, d[near], rcond=None)[0][:3]
+    w, v = np.linalg.eigh(np.array([[a, c / 2], [c / 2, b]]))
+    valley = v[:, int(np.argmin(w))]
+    best = s[near][int(np.argmin(d[near]))]
+    for t in (-TAIL_SD[1], -TAIL_SD[0], TAIL_SD[0], TAIL_SD[1]):
+        at(best + t * valley)
+    return edge
+
+
+def _posterior_samples(points, geometry, sds, scale):
+    """``(s, D)``: each fit's thicknesses in sd of the given ones, and ``-2 log`` of the
+    posterior there (its chi^2 over the misfit scale plus the Gaussian priors)."""
+    s = np.array([[(getattr(g, k) - getattr(geometry, k)) / sd for k, sd in sds.items()]
+                  for g, _, _ in points], dtype=float).reshape(len(points), len(sds))
+    d = np.array([c for _, _, c in points], dtype=float) / scale + np.sum(s * s, axis=1)
+    return s, d
+
+
+def _profiled(intervals, points, geometry, sds, est0) -> dict:
+    """Each modulus's interval from the profile over the thicknesses, in log: at every
+    fit ``p`` (a thickness, its moduli ``X_p`` and chi^2 ``c_p``) the posterior's rise
+    ``D_p = c_p / s + sum ((t - t0) / sd)^2`` above its least (``s`` the misfit scale),
+    and about ``X_p`` the interval of the estimate's own half-widths ``h`` shrunk by
+    ``sqrt(1 - D_p / q)`` (``q`` the threshold): the union over the fits.  Where the
+    chi^2 is quadratic in the thickness and the moduli linear in it, this is the
+    Laplace widening along one thickness; where not, it follows the chi^2."""
+    scale = float(intervals.get("misfit_scale") or 1.0)
+    q = float(intervals.get("delta_chi2_threshold") or 0.0) / scale
+    if not points or q <= 0:
+        return {}
+    rise = _posterior_samples(points, geometry, sds, scale)[1]
+    least = float(np.nanmin(rise))
+    out = {}
+    for i, name in enumerate(("X1d", "X1h")):
+        iv = intervals.get(name)
+        if not iv:
+            continue
+        e0 = float(est0[i])
+        h = {side: abs(math.log(iv[side] / e0)) if iv[side] and iv[side] > 0 else None
+             for side in ("lower", "upper")}
+        lo = hi = None
+        for (_, x, _), r in zip(points, rise):
+            if not (math.isfinite(r) and r - least < q and x[i] > 0):
+                continue
+            shrink = math.sqrt(1.0 - (r - least) / q)
+            if h["lower"] is not None:
+                v = math.log(x[i]) - h["lower"] * shrink
+                lo = v if lo is None else min(lo, v)
+            if h["upper"] is not None:
+                v = math.log(x[i]) + h["upper"] * shrink
+                hi = v if hi is None else max(hi, v)
+        out[name] = (None if lo is None else math.exp(lo), None if hi is None else math.exp(hi))
+    return out
+
+
+def _widen_to(intervals, profiled, edge) -> None:
+    """The intervals widened to the profile's where it reaches further (in place)."""
+    for name, (lo, hi) in profiled.items():
+        iv = intervals[name]
+        if lo is not None and iv["lower"] and lo < iv["lower"]:
+            iv["lower"] = lo
+        if hi is not None and iv["upper"] and hi > iv["upper"]:
+            iv["upper"] = hi
+    intervals["notes"] = list(intervals.get("notes", [])) + [
+        "and reach as far as the profile of the fits over the given thicknesses (to 3 sd) "
+        "takes them" + (f"; left out beyond the simulated geometry: {', '.join(edge)}"
+                               if edge else "")]
 
 
 #: The farthest a thickness the curves prefer moves the estimate, in sd of the given one

@@ -324,6 +324,27 @@ class OnDemandRays:
         self.interpolated += 1
         return m * a, info
 
+    def holds(self, probe_mm: float, layers) -> bool:
+        """Whether the neo-Hookean geometry space's grid holds ``layers`` under this probe
+        (its rays are read there, not solved whole; :meth:`reading_only` reads them
+        whatever their error estimate)."""
+        if self.geometry is None:
+            return False
+        ref = _keywords({path: round_sig(similar_length(t, probe_mm), 6)
+                         for path, t in layer_thicknesses(layers).items()})
+        return bool(self.geometry.grid.covers(ref["t_d"], ref["t_h"]))
+
+    def reading_only(self) -> "OnDemandRays":
+        """This solver reading every ray the geometry spaces hold whatever its error
+        estimate (no tolerance), sharing its cache: for fits that only sample a
+        likelihood's tail, where a ray solved for accuracy would cost more than the
+        fit is worth."""
+        import copy
+
+        out = copy.copy(self)
+        out.tolerance = out.move_tolerance = math.inf
+        return out
+
     def cause_geometry(self, cause):
         """The geometry space of a cause (not a thickness), or None where there is none."""
         if cause.name not in self._cause_spaces:

@@ -198,8 +198,33 @@ class LoadedSpace:
                     out.append(n)
         return out
 
+    def read_only_at(self, geometry: Geometry, probes):
+        """This space at ``geometry``, its rays read off the geometry spaces whatever
+        their error estimate, or None where the grid does not hold it under every probe
+        (no ray is solved; see :meth:`OnDemandRays.reading_only`).
+
+        Parameters
+        ----------
+        geometry : Geometry
+        probes : iterable of float
+
+        Returns
+        -------
+        LoadedSpace or None
+        """
+        from ._geometry import _rounded_layers
+
+        od, layers = self.on_demand, _rounded_layers(geometry, [])
+        if od is None or not all(od.holds(float(p), layers) for p in probes):
+            return None
+        out = self.at(geometry)
+        out.on_demand = od.reading_only()
+        return out
+
     def _geometry_key(self):
-        return (round(self.geometry.t_d, 6), round(self.geometry.t_h, 6))
+        # slices read only are kept apart from those read within the tolerance
+        tolerance = getattr(self.on_demand, "tolerance", None)
+        return (round(self.geometry.t_d, 6), round(self.geometry.t_h, 6), tolerance)
 
     def _kept(self) -> dict:
         """What is kept at :attr:`geometry` (made the most recently used)."""
