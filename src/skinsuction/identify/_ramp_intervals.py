@@ -348,9 +348,9 @@ def _widen_to(intervals, profiled, edge) -> None:
         if hi is not None and iv["upper"] and hi > iv["upper"]:
             iv["upper"] = hi
     intervals["notes"] = list(intervals.get("notes", [])) + [
-        "and reach as far as the profile of the fits over the given thicknesses (to 3 sd) "
-        "takes them" + (f"; left out beyond the simulated geometry: {', '.join(edge)}"
-                               if edge else "")]
+        "the intervals also reach as far as the profile of the fits over the given "
+        "thicknesses (to 3 sd) takes them"
+        + (f"; left out beyond the simulated geometry: {', '.join(edge)}" if edge else "")]
 
 
 #: The farthest a thickness the curves prefer moves the estimate, in sd of the given one
