@@ -152,8 +152,10 @@ def test_mode2_of_an_elastic_skin_follows_the_ramp_up_and_down(capsys, tmp_path)
                        capsys)
     ramp = csv(out).set_index("pressure_mbar")["deflection_mm"]
     np.testing.assert_allclose(curve.pressure_mbar, np.r_[0:451:45, 405:-1:-45], atol=1e-9)
+    # the time solve keeps its tangent while Newton contracts, so the unloaded skin
+    # returns to 0 within the solver's tolerance (picometres), not to the bit
     np.testing.assert_allclose(curve.deflection_mm, ramp.loc[np.round(curve.pressure_mbar)],
-                               rtol=1e-6, atol=1e-12)
+                               rtol=1e-6, atol=1e-9)
 
 
 def test_history_file_is_solved_and_sampled(capsys, tmp_path):
