@@ -3,9 +3,11 @@
     python benchmarks/geometry_accuracy.py [--space-dir DIR] [--geometries 30]
         [--per-geometry 4] [--seed 0] [--workers 2] [--cache DIR]
         [--geometry-space FILE | --no-geometry-space] [--side-by-side]
+        [--aperture 2,8] [--t-d 0.5,2.5] [--t-h 0.5,10]
 
 Draws random geometries (the aperture uniform in 2-8 mm, t_d uniform in 0.5-2.5
-mm, t_h log-uniform in 0.5-10 mm), solves their neo-Hookean rays on demand (as
+mm, t_h log-uniform in 0.5-10 mm; narrower ranges with --aperture, --t-d, --t-h, e.g.
+the thin corner), solves their neo-Hookean rays on demand (as
 `identify` and `diagnose` do, skinsuction.space.OnDemandRays), then at random
 points of each (X1h/X1d log-uniform over the ratio nodes, X1d log-uniform in
 0.005-0.15 MPa raised to the load reach, a protocol to 100, 300 or 500 mbar)
@@ -99,6 +101,13 @@ def _read_at(space, pt, pressures):
     return f([[math.log10(pt.x1d), math.log10(pt.ratio)]])[0].tolist()
 
 
+def _range(text):
+    lo, hi = (float(v) for v in text.split(","))
+    if not 0 < lo <= hi:
+        raise argparse.ArgumentTypeError(f"{text!r}: want LO,HI with 0 < LO <= HI (mm)")
+    return lo, hi
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--space-dir", default="results/simulated_space/scale_free")
@@ -116,6 +125,9 @@ def main(argv=None):
                     help="error estimate above which a ray is solved (inf: never)")
     ap.add_argument("--side-by-side", action="store_true",
                     help="also solve the rays and compare both with the same FE runs")
+    for key, default in (("aperture", "2,8"), ("t-d", "0.5,2.5"), ("t-h", "0.5,10")):
+        ap.add_argument(f"--{key}", default=default, type=_range,
+                        help=f"range drawn from, mm (default {default})")
     args = ap.parse_args(argv)
     geometry = None if args.no_geometry_space else args.geometry_space
 
@@ -127,8 +139,9 @@ def main(argv=None):
     lr = np.log10(spec.ratio_nodes)
     jobs = []
     for _ in range(args.geometries):
-        geo = (round(float(rng.uniform(2.0, 8.0)), 2), round(float(rng.uniform(0.5, 2.5)), 2),
-               round(float(10 ** rng.uniform(math.log10(0.5), 1.0)), 2))
+        geo = (round(float(rng.uniform(*args.aperture)), 2),
+               round(float(rng.uniform(*args.t_d)), 2),
+               round(float(10 ** rng.uniform(*np.log10(args.t_h))), 2))
         pts = []
         for _ in range(args.per_geometry):
             p_max, p_step = PROTOCOLS[rng.integers(len(PROTOCOLS))]
