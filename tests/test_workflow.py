@@ -169,14 +169,14 @@ def test_the_neo_hookean_geometry_in_jobs_of_one_t_h_node_solves_only_new_nodes(
     # are unpacked, the new nodes' jobs alone are solved
     grid = yaml.safe_load((workdir / "config" / "config.yaml").read_text())[
         "scale_free_space"]["geometry"]
-    th = sorted([0.0862, *grid["t_h_over_a"]])
+    th = sorted([0.045, *grid["t_h_over_a"]])
     overlay = {"scale_free_space": {"geometry": {"t_h_over_a": th, "causes": {
         "t_h_per_job": {"pre_tension": 1, "neo_hookean": 1}}}}}
     args = write_config(workdir, "thin", overlay)[:2]
     target = "results/simulated_space/scale_free/geometry/neo_hookean.parquet"
     out = snakemake(workdir, "-n", target, *args)
     assert job_counts(out)["simulate_geometry_bundle"] == len(grid["t_d_over_a"]) * len(th)
-    assert "rays/td0.125__th0.0862.parquet" in out
+    assert f"rays/td{grid['t_d_over_a'][0]:g}__th0.045.parquet" in out
     out = snakemake(workdir, "-n", "logs/scale_free/geometry/unpack_neo_hookean.json", *args)
     assert job_counts(out) == {"unpack_geometry_space": 1}
 
