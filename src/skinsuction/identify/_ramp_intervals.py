@@ -17,6 +17,7 @@ from skinsuction.space import THICKNESS_RESOLUTION_MM
 from ._intervals import profile_intervals
 from ._polish import polish
 from ._ramp_steps import RampSetup, make_objective
+from ._thickness_profile import _at_mode, _profile_fits, _profiled, _widen_to
 from ._space_error import MODEL_ERROR_RELATIVE, likelihood_residuals
 
 __all__ = ["estimate_noise", "noise_and_intervals", "thickness_uncertainty"]
@@ -113,20 +114,13 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
     The interval half-widths (in log) are combined with ``z`` times these moves in
     quadrature (``z`` the normal quantile of the level).
 
-    Where the curves prefer another thickness (the posterior's mode, the vertex of
-    that quadratic, within 2 sd of the given one, then located again along the move
-    by :func:`_refined`), the estimate is the fit at that thickness and the
-    intervals are centred on it: two probes often pin a thin dermis down to
-    hundredths of a mm, and holding the given one biased X1d by up to 50 % with
-    intervals a few % wide.  On the 63 ramps of the layers study's
-    first 64 subjects the 95 % intervals held the true X1d in 62 % held, 78 % moved
-    (X1h 63 -> 73 %; docs/studies.md).
-
-    The intervals then reach as far as the profile over the thicknesses takes them
-    (:func:`_profile_fits`, :func:`_profiled`): fits at the corners of +-1 sd and along
-    the valley across the axes (a thicker dermis over a thinner hypodermis), read off
-    the geometry spaces; on the layers study's 200 ramps X1d 84.0 -> 86.0 %, X1h
-    83.0 -> 87.5 %.
+    Where the curves prefer another thickness (the vertex of that quadratic, within
+    2 sd, located again along the move by :func:`_refined`; then, with a noise, the
+    posterior's mode over the thickness lattice, :func:`._thickness_profile._at_mode`),
+    the estimate is the fit there and the intervals are centred on it; they reach as
+    far as the profile over the thicknesses takes them (:func:`_profiled`).  On the
+    layers study's 200 ramps the X1d intervals held the truth in 62 % holding the given
+    thicknesses, 94 % now (docs/geometry.md#thickness-uncertainty).
 
     Parameters
     ----------
@@ -171,14 +165,17 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
         x1d = float(obj.to_moduli(th.reshape(1, -1))[0, 0]) if setup.scale_free else None
         resid = likelihood_residuals(obj, setup.objective, curves, max(sigma_mm, 1e-9),
                                      MODEL_ERROR_RELATIVE if setup.scale_free else 0.0, x1d)
-        chi2 = float(np.nansum(resid(th.reshape(1, -1)) ** 2))
+        r = np.nan_to_num(np.asarray(resid(th.reshape(1, -1)), dtype=float).ravel())
+        chi2 = float(r @ r)
         for n in moved.notes(probes):
             if n not in space.notes(probes) and n not in notes_seen:
                 notes_seen.append(n)
         points.append((g, obj.to_moduli(th)[0], chi2))
+        vectors.append(r)
         return obj.to_moduli(th)[0], chi2
 
     points = []  # (geometry, moduli, chi2) of every fit: the profile over the thicknesses
+    vectors = []  # their residual vectors (chi2 = r @ r)
 
     notes_seen = []
     _, c0 = fit_at(geometry)
@@ -189,14 +186,18 @@ def thickness_uncertainty(setup: RampSetup, theta, est, intervals, level, noise=
         name = {"t_d": "dermis_thickness", "t_h": "hypodermis_thickness"}[key]
         out[name] = _thickness_record(getattr(geometry, key), sd, (lo, hi), (c_lo, c0, c_hi),
                                       sigma_mm > 0)
-    est0, est = est, _at_preferred(setup, fit_at, out, est, c0)
+    est0, (est, moves) = est, _at_preferred(setup, fit_at, out, est, c0)
     setup.warnings.extend(f"geometry (thickness +- 1 sd): {n}" for n in notes_seen)
     if intervals is not None:
-        edge = _profile_fits(setup, fit_at, sds, points,
-                             float(intervals.get("misfit_scale") or 1.0))
+        scale = float(intervals.get("misfit_scale") or 1.0)
+        edge = _profile_fits(setup, fit_at, sds, points, scale)
+        if sigma_mm > 0:
+            q = float(intervals.get("delta_chi2_threshold") or 0.0) / scale
+            est = _at_mode(setup, fit_at, sds, scale, q, (points, vectors), out, est, moves)
         profiled = _profiled(intervals, points, geometry, sds, est0)
         _widen(intervals, out, est0, est, level)
         _widen_to(intervals, profiled, edge)
+    _note_moves(setup, out, moves)
     return out, est
 
 
@@ -243,131 +244,22 @@ def _widen(intervals, out, est0, est, level) -> None:
         "the fit at each thickness +- 1 sd, a Gaussian prior on the thickness)"]
 
 
-#: The profile over the given thicknesses reaches this far (in sd of the given ones)
-#: beyond the fits at +-1 sd: the chi^2 of the curves in a thin dermis is often flat on
-#: one side and steep on the other, which the quadratic through +-1 sd reads as a sharp
-#: minimum; and with both thicknesses given, a thicker dermis over a thinner hypodermis
-#: can fit as well as the given pair (a valley across the axes).
-TAIL_SD = (2.0, 3.0)
-
-
-def _profile_fits(setup, fit_at, sds, points, scale) -> list:
-    """More fits of the posterior over the given thicknesses, read off the geometry
-    spaces whatever their error estimate (no FE ray: a likelihood's tail needs no
-    0.2 %): with one thickness given, at +-2 and +-3 sd; with both, at the four
-    corners of +-1 sd and then at 2 and 3 sd either way along the valley of the
-    quadratic through the nine fits, from the best of them.  Returns the
-    thicknesses left out, beyond the simulated geometry."""
-    geometry, space, probes, edge = setup.geometry, setup.space, setup.probes, []
-    keys = list(sds)
-
-    def at(s):  # the fit at s sd (a vector over ``keys``), if the grid holds it
-        g = geometry
-        for k, v in zip(keys, s):
-            g = g.shifted(k, v * sds[k])
-        moved = (space.read_only_at(g, probes)
-                 if all(getattr(g, k) > 0 for k in keys) else None)
-        if moved is None:
-            edge.append(", ".join(f"{k} = {getattr(g, k):.3g} mm" for k in keys))
-        else:
-            fit_at(g, moved)
-
-    if len(keys) == 1:
-        for v in (-TAIL_SD[1], -TAIL_SD[0], TAIL_SD[0], TAIL_SD[1]):
-            at([v])
-        return edge
-    for corner in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
-        at(corner)
-    s, d = _posterior_samples(points, geometry, sds, scale)
-    near = np.all(np.abs(s) <= 1 + 1e-9, axis=1) & np.isfinite(d)
-    if near.sum() < 6:
-        return edge
-    x, y = s[near].T
-    A = np.column_stack([x * x, y * y, x * y, x, y, np.ones_like(x)])
-    a, b, c = np.linalg.lstsq(A, d[near], rcond=None)[0][:3]
-    w, v = np.linalg.eigh(np.array([[a, c / 2], [c / 2, b]]))
-    valley = v[:, int(np.argmin(w))]
-    best = s[near][int(np.argmin(d[near]))]
-    for t in (-TAIL_SD[1], -TAIL_SD[0], TAIL_SD[0], TAIL_SD[1]):
-        at(best + t * valley)
-    return edge
-
-
-def _posterior_samples(points, geometry, sds, scale):
-    """``(s, D)``: each fit's thicknesses in sd of the given ones, and ``-2 log`` of the
-    posterior there (its chi^2 over the misfit scale plus the Gaussian priors)."""
-    s = np.array([[(getattr(g, k) - getattr(geometry, k)) / sd for k, sd in sds.items()]
-                  for g, _, _ in points], dtype=float).reshape(len(points), len(sds))
-    d = np.array([c for _, _, c in points], dtype=float) / scale + np.sum(s * s, axis=1)
-    return s, d
-
-
-def _profiled(intervals, points, geometry, sds, est0) -> dict:
-    """Each modulus's interval from the profile over the thicknesses, in log: at every
-    fit ``p`` (a thickness, its moduli ``X_p`` and chi^2 ``c_p``) the posterior's rise
-    ``D_p = c_p / s + sum ((t - t0) / sd)^2`` above its least (``s`` the misfit scale),
-    and about ``X_p`` the interval of the estimate's own half-widths ``h`` shrunk by
-    ``sqrt(1 - D_p / q)`` (``q`` the threshold): the union over the fits.  Where the
-    chi^2 is quadratic in the thickness and the moduli linear in it, this is the
-    Laplace widening along one thickness; where not, it follows the chi^2."""
-    scale = float(intervals.get("misfit_scale") or 1.0)
-    q = float(intervals.get("delta_chi2_threshold") or 0.0) / scale
-    if not points or q <= 0:
-        return {}
-    rise = _posterior_samples(points, geometry, sds, scale)[1]
-    least = float(np.nanmin(rise))
-    out = {}
-    for i, name in enumerate(("X1d", "X1h")):
-        iv = intervals.get(name)
-        if not iv:
-            continue
-        e0 = float(est0[i])
-        h = {side: abs(math.log(iv[side] / e0)) if iv[side] and iv[side] > 0 else None
-             for side in ("lower", "upper")}
-        lo = hi = None
-        for (_, x, _), r in zip(points, rise):
-            if not (math.isfinite(r) and r - least < q and x[i] > 0):
-                continue
-            shrink = math.sqrt(1.0 - (r - least) / q)
-            if h["lower"] is not None:
-                v = math.log(x[i]) - h["lower"] * shrink
-                lo = v if lo is None else min(lo, v)
-            if h["upper"] is not None:
-                v = math.log(x[i]) + h["upper"] * shrink
-                hi = v if hi is None else max(hi, v)
-        out[name] = (None if lo is None else math.exp(lo), None if hi is None else math.exp(hi))
-    return out
-
-
-def _widen_to(intervals, profiled, edge) -> None:
-    """The intervals widened to the profile's where it reaches further (in place)."""
-    for name, (lo, hi) in profiled.items():
-        iv = intervals[name]
-        if lo is not None and iv["lower"] and lo < iv["lower"]:
-            iv["lower"] = lo
-        if hi is not None and iv["upper"] and hi > iv["upper"]:
-            iv["upper"] = hi
-    intervals["notes"] = list(intervals.get("notes", [])) + [
-        "the intervals also reach as far as the profile of the fits over the given "
-        "thicknesses (to 3 sd) takes them"
-        + (f"; left out beyond the simulated geometry: {', '.join(edge)}" if edge else "")]
-
-
 #: The farthest a thickness the curves prefer moves the estimate, in sd of the given one
 #: (the quadratic through the fits at +- 1 sd that locates it is an extrapolation beyond).
 MAX_MOVE_SD = 2.0
 
 
 def _at_preferred(setup, fit_at, out, est, c0):
-    """The estimate refitted at the thicknesses the curves prefer (``out`` records them);
-    ``est`` where they prefer the given ones (within a tenth of the posterior sd).
+    """The estimate refitted at the thicknesses the curves prefer (``out`` records them),
+    and how each moved (``{key: remark}``, for :func:`_note_moves`); ``est`` where they
+    prefer the given ones (within a tenth of the posterior sd).
 
     The vertex of the quadratic through the fits at +- 1 sd overshoots where chi^2 is
     far from quadratic (a 0.60 mm dermis given as 0.70 came out at 0.56): along the
     move, the parabola through the posterior at the given thicknesses, its slope
     there and its value at the vertex locates the mode again, and the fit there is
     taken if the posterior is higher (one fit more)."""
-    geometry, moved, notes, move = setup.geometry, setup.geometry, [], {}
+    geometry, moved, move, remarks = setup.geometry, setup.geometry, {}, {}
     for key, name in (("t_d", "dermis_thickness"), ("t_h", "hypodermis_thickness")):
         rec = out.get(name)
         if rec is None:
@@ -380,22 +272,34 @@ def _at_preferred(setup, fit_at, out, est, c0):
         moved, rec["estimate_at_mm"] = moved.shifted(key, t - t0), t
         move[key] = (name, t - t0)
     if moved is geometry:
-        return est
+        return est, remarks
     at, c1 = fit_at(moved)
     at, s = _refined(setup, fit_at, out, move, at, c0, c1)
     for key, (name, delta) in move.items():
         rec, t0 = out[name], getattr(geometry, key)
         t, pref, sd = t0 + s * delta, rec["preferred_by_the_curves_mm"], rec["sd_mm"]
         rec["estimate_at_mm"] = t
-        notes.append(f"{name.replace('_', ' ')} {t:.3g} mm (given {t0:g} ± {sd:g}"
-                     + (f"; the quadratic through ±1 sd puts it at {pref:.3g}" if s != 1
-                        and abs(t - pref) > 0.1 * rec["posterior_sd_mm"] else "")
-                     + (f"; at most {MAX_MOVE_SD:g} sd" if abs(t - t0) >= MAX_MOVE_SD * sd
-                        - 1e-12 else "") + ")")
-    setup.warnings.append("geometry: the curves prefer other thicknesses than the given "
-                          "ones; the estimate is the fit at " + ", ".join(notes) +
-                          ", the intervals about it")
-    return np.asarray(at, dtype=float)
+        remarks[key] = ((f"; the quadratic through ±1 sd puts it at {pref:.3g}" if s != 1
+                         and abs(t - pref) > 0.1 * rec["posterior_sd_mm"] else "")
+                        + (f"; at most {MAX_MOVE_SD:g} sd" if abs(t - t0) >= MAX_MOVE_SD * sd
+                           - 1e-12 else ""))
+    return np.asarray(at, dtype=float), remarks
+
+
+def _note_moves(setup, out, remarks) -> None:
+    """The warning that the estimate is the fit at other thicknesses than the given."""
+    notes = []
+    for key, name in (("t_d", "dermis_thickness"), ("t_h", "hypodermis_thickness")):
+        rec = out.get(name)
+        if rec is None or key not in remarks:
+            continue
+        t0 = getattr(setup.geometry, key)
+        notes.append(f"{name.replace('_', ' ')} {rec['estimate_at_mm']:.3g} mm (given {t0:g} "
+                     f"± {rec['sd_mm']:g}{remarks[key]})")
+    if notes:
+        setup.warnings.append("geometry: the curves prefer other thicknesses than the given "
+                              "ones; the estimate is the fit at " + ", ".join(notes) +
+                              ", the intervals about it")
 
 
 def _refined(setup, fit_at, out, move, at, c0, c1):
