@@ -544,14 +544,9 @@ def test_a_causes_fit_starts_from_the_neo_hookean_one_with_the_thickness_in_its_
     assert fit_model(out["pre_tension"], data, seed=1, starts=[start]).chi2 <= fit.chi2 * (1 + 1e-9)
 
 
-def test_the_intervals_follow_the_posterior_of_both_thicknesses_across_its_valley(
-        tmp_path, monkeypatch):
-    """The layers study's S006: a 1.41 mm dermis over 0.59 mm given as 1.27 and 0.67 mm.
-    A thicker dermis over a thinner hypodermis fits nearly as well as the given pair, a
-    valley across the thickness axes that the quadratics along each axis do not see:
-    with them alone the X1d interval misses the truth; the fits along the valley (and
-    at the corners of +-1 sd, read off the geometry space, no FE ray) widen it to it."""
-    import skinsuction.identify._ramp_intervals as ri
+def _layers_study_ramp(tmp_path, i):
+    """The layers study's subject ``i`` (its default design): its truth, and its FE ramp
+    identified with intervals (a callable: the same seed each time, the same cache)."""
     from skinsuction.evaluation._layers_study import (
         LayersStudyDesign,
         _ramp,
@@ -563,14 +558,27 @@ def test_the_intervals_follow_the_posterior_of_both_thicknesses_across_its_valle
     from skinsuction.space._shipped import default_space_dir
 
     design = LayersStudyDesign()
-    truth = draw_layers_subject(design, 5)
-    assert truth["subject"] == "S006" and truth["t_d_given_mm"] == 1.27
-    path = tmp_path / "S006_ramp.csv"
+    truth = draw_layers_subject(design, i)
+    path = tmp_path / f"{truth['subject']}_ramp.csv"
     _write_ramp(path, truth, *_ramp(design, truth))
     space = load_space(default_space_dir(), cache_dir=tmp_path / "cache")
+    return truth, lambda: identify_data(load_measured(path), space, objective="weighted",
+                                        repeats=2, seed=5)
+
+
+def test_the_intervals_follow_the_posterior_of_both_thicknesses_across_its_valley(
+        tmp_path, monkeypatch):
+    """The layers study's S006: a 1.41 mm dermis over 0.59 mm given as 1.27 and 0.67 mm.
+    A thicker dermis over a thinner hypodermis fits nearly as well as the given pair, a
+    valley across the thickness axes that the quadratics along each axis do not see:
+    with them alone the X1d interval misses the truth; the fits along the valley (and
+    at the corners of +-1 sd, read off the geometry space, no FE ray) widen it to it."""
+    import skinsuction.identify._ramp_intervals as ri
+    truth, identify = _layers_study_ramp(tmp_path, 5)
+    assert truth["subject"] == "S006" and truth["t_d_given_mm"] == 1.27
 
     def x1d_interval():
-        r = identify_data(load_measured(path), space, objective="weighted", repeats=2, seed=5)
+        r = identify()
         return r["intervals"]["X1d"], r["intervals"]["notes"], r["estimate"]["x1d_mpa"]
 
     iv, notes, est = x1d_interval()
@@ -590,25 +598,11 @@ def test_the_estimate_is_the_posteriors_mode_along_a_narrow_valley(tmp_path, mon
     low and its interval 5 % wide, missing the truth. Gauss-Newton over the thickness
     lattice (fits read off the geometry space) finds the floor near the true layers."""
     import skinsuction.identify._ramp_intervals as ri
-    from skinsuction.evaluation._layers_study import (
-        LayersStudyDesign,
-        _ramp,
-        _write_ramp,
-        draw_layers_subject,
-    )
-    from skinsuction.identify.measured_fit import identify_data
-    from skinsuction.space import load_space
-    from skinsuction.space._shipped import default_space_dir
-
-    design = LayersStudyDesign()
-    truth = draw_layers_subject(design, 25)
+    truth, identify = _layers_study_ramp(tmp_path, 25)
     assert truth["subject"] == "S026" and truth["t_d_given_mm"] == 0.92
-    path = tmp_path / "S026_ramp.csv"
-    _write_ramp(path, truth, *_ramp(design, truth))
-    space = load_space(default_space_dir(), cache_dir=tmp_path / "cache")
 
     def identified():
-        r = identify_data(load_measured(path), space, objective="weighted", repeats=2, seed=5)
+        r = identify()
         return r["intervals"]["X1d"], r["estimate"]["x1d_mpa"], r["geometry"]
 
     iv, est, geometry = identified()
