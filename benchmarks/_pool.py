@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -19,3 +20,11 @@ def run_rows(func, jobs, workers: int, out) -> tuple:
     out.parent.mkdir(parents=True, exist_ok=True)
     rows.to_csv(out, index=False)
     return rows, time.perf_counter() - t0
+
+
+def mm_range(text) -> tuple:
+    """``LO,HI`` (mm) of a command-line option: the range a benchmark draws a length from."""
+    lo, hi = (float(v) for v in text.split(","))
+    if not 0 < lo <= hi:
+        raise argparse.ArgumentTypeError(f"{text!r}: want LO,HI with 0 < LO <= HI (mm)")
+    return lo, hi

@@ -2,12 +2,12 @@
 
     python benchmarks/cause_geometry_accuracy.py --cause strain_stiffening
         [--geometries 24] [--ratios 3] [--seed 0] [--workers 2] [--cache DIR]
-        [--tolerance 0.01]
+        [--tolerance 0.01] [--space-dir DIR] [--aperture 2,8] [--t-d 0.5,2.5] [--t-h 0.5,10]
 
 Draws random geometries (aperture uniform in 2-8 mm, t_d uniform in 0.5-2.5 mm,
-t_h log-uniform in 0.5-10 mm) and, at each, random X1h/X1d nodes; reads the cause's
-rays there at every node of the cause (skinsuction.space.OnDemandRays, the default
-geometry spaces) and solves the same rays directly (geometry=None, a cache of their
+t_h log-uniform in 0.5-10 mm; narrower ranges with --aperture, --t-d, --t-h) and, at each, random X1h/X1d nodes; reads the cause's
+rays there at every node of the cause (skinsuction.space.OnDemandRays, the geometry
+spaces beside --space-dir: by default the workflow's build, else the shipped one) and solves the same rays directly (geometry=None, a cache of their
 own). Prints the largest relative error of M along each ray (over the loads where
 both exist): percentiles overall, per aperture band and per cause node, for the
 rays read (the default tolerance) and for the grid alone (every ray read whatever
@@ -26,19 +26,23 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from _pool import mm_range
 
 _CTX = {}
 
 
-def _init(cause_name, cache, tolerance):
+def _init(cause_name, cache, tolerance, space_dir):
     from skinsuction.space import BASELINE, OnDemandRays, read_ray_spaces
-    from skinsuction.space._shipped import default_space_dir
+    from skinsuction.space._geometry_files import geometry_file_for
 
-    spaces = read_ray_spaces(default_space_dir())
+    spaces = read_ray_spaces(space_dir)
     spec = spaces[BASELINE].spec
+    geometry = geometry_file_for(space_dir)  # its causes' spaces lie beside it
     _CTX.update(cause=spaces[cause_name].cause,
-                read=OnDemandRays(spec, cache_dir=cache, progress=None, tolerance=tolerance),
-                raw=OnDemandRays(spec, cache_dir=cache, progress=None, tolerance=math.inf),
+                read=OnDemandRays(spec, cache_dir=cache, progress=None, tolerance=tolerance,
+                                  geometry=geometry),
+                raw=OnDemandRays(spec, cache_dir=cache, progress=None, tolerance=math.inf,
+                                 geometry=geometry),
                 solved=OnDemandRays(spec, cache_dir=cache, geometry=None, progress=None))
     if _CTX["read"].cause_geometry(_CTX["cause"]) is None:
         raise SystemExit(f"no geometry space of {cause_name} beside the neo-Hookean one")
@@ -92,23 +96,28 @@ def main(argv=None):
     ap.add_argument("--cache", default="benchmarks/out/cause_geometry_cache")
     ap.add_argument("--tolerance", type=float, default=1e-2)
     ap.add_argument("--out", default="benchmarks/out/cause_geometry_accuracy.csv")
+    ap.add_argument("--space-dir", default=None,
+                    help="scale-free space (default: the workflow's build, else the shipped)")
+    for key, default in (("aperture", "2,8"), ("t-d", "0.5,2.5"), ("t-h", "0.5,10")):
+        ap.add_argument(f"--{key}", default=default, type=mm_range,
+                        help=f"range drawn from, mm (default {default})")
     a = ap.parse_args(argv)
     from skinsuction.space import BASELINE, read_ray_spaces
     from skinsuction.space._shipped import default_space_dir
 
-    nodes = read_ray_spaces(default_space_dir())[BASELINE].spec.ratio_nodes
+    space_dir = a.space_dir or default_space_dir()
+    nodes = read_ray_spaces(space_dir)[BASELINE].spec.ratio_nodes
     rng = np.random.default_rng(a.seed)
     jobs = []
     for _ in range(a.geometries):
-        probe = float(rng.uniform(2, 8))
-        t_d, t_h = float(rng.uniform(0.5, 2.5)), float(np.exp(rng.uniform(np.log(0.5),
-                                                                          np.log(10))))
+        probe = float(rng.uniform(*a.aperture))
+        t_d, t_h = float(rng.uniform(*a.t_d)), float(np.exp(rng.uniform(*np.log(a.t_h))))
         pick = sorted(rng.choice(len(nodes), a.ratios, replace=False))
         jobs.append((round(probe, 3), round(t_d, 2), round(t_h, 2),
                      tuple(nodes[i] for i in pick)))
     w0 = time.time()
     with ProcessPoolExecutor(a.workers, initializer=_init,
-                             initargs=(a.cause, a.cache, a.tolerance)) as pool:
+                             initargs=(a.cause, a.cache, a.tolerance, space_dir)) as pool:
         rows = [r for out in pool.map(_run, jobs) for r in out]
     df = pd.DataFrame(rows)
     df["band"] = df["probe_mm"].map(_band)

@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from _pool import mm_range
 
 _CTX = {}
 
@@ -101,13 +102,6 @@ def _read_at(space, pt, pressures):
     return f([[math.log10(pt.x1d), math.log10(pt.ratio)]])[0].tolist()
 
 
-def _range(text):
-    lo, hi = (float(v) for v in text.split(","))
-    if not 0 < lo <= hi:
-        raise argparse.ArgumentTypeError(f"{text!r}: want LO,HI with 0 < LO <= HI (mm)")
-    return lo, hi
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--space-dir", default="results/simulated_space/scale_free")
@@ -126,7 +120,7 @@ def main(argv=None):
     ap.add_argument("--side-by-side", action="store_true",
                     help="also solve the rays and compare both with the same FE runs")
     for key, default in (("aperture", "2,8"), ("t-d", "0.5,2.5"), ("t-h", "0.5,10")):
-        ap.add_argument(f"--{key}", default=default, type=_range,
+        ap.add_argument(f"--{key}", default=default, type=mm_range,
                         help=f"range drawn from, mm (default {default})")
     args = ap.parse_args(argv)
     geometry = None if args.no_geometry_space else args.geometry_space

@@ -154,8 +154,10 @@ def test_a_cause_with_t_d_nodes_of_its_own_has_a_job_a_node_and_unpacks_the_ship
     assert set(causes["t_d_over_a"]) < set(own)
     out = snakemake(workdir, "-n",
                     "results/simulated_space/scale_free/geometry/strain_stiffening.parquet")
-    assert job_counts(out)["simulate_geometry_bundle"] == len(own)
-    assert "strain_stiffening__td0.7354" in out
+    # one job per (t_d/a, t_h/a) node, as pre-tension's (t_h_per_job)
+    assert causes["t_h_per_job"]["strain_stiffening"] == 1
+    assert job_counts(out)["simulate_geometry_bundle"] == len(own) * len(causes["t_h_over_a"])
+    assert "strain_stiffening__td0.7354__th0.2182" in out
     out = snakemake(workdir, "-n", "logs/scale_free/geometry/unpack_strain_stiffening.json")
     assert job_counts(out) == {"unpack_geometry_space": 1}
     bad = {"scale_free_space": {"geometry": {"causes": {"t_d_over_a_of": {"dermis_thickness":
