@@ -166,6 +166,26 @@ def test_a_cause_with_t_d_nodes_of_its_own_has_a_job_a_node_and_unpacks_the_ship
     assert "t_d_over_a_of: 'dermis_thickness' is not in causes.names" in out
 
 
+def test_a_cause_with_t_h_nodes_of_its_own_solves_them_alone(workdir):
+    # one cause's thin corner built before the other's: its own t_h/a nodes
+    causes = yaml.safe_load((workdir / "config" / "config.yaml").read_text())[
+        "scale_free_space"]["geometry"]["causes"]
+    th = sorted([0.0862, *causes["t_h_over_a"]])
+    overlay = {"scale_free_space": {"geometry": {"causes": {
+        "t_h_over_a_of": {"strain_stiffening": th}}}}}
+    args = write_config(workdir, "own_th", overlay)[:2]
+    rays = "results/simulated_space/scale_free/geometry"
+    out = snakemake(workdir, "-n", f"{rays}/strain_stiffening.parquet", *args)
+    own = causes["t_d_over_a_of"]["strain_stiffening"]
+    assert job_counts(out)["simulate_geometry_bundle"] == len(own) * len(th)
+    assert "strain_stiffening__td0.7354__th0.0862" in out
+    out = snakemake(workdir, "-n", f"{rays}/pre_tension.parquet", *args)
+    assert "__th0.0862" not in out
+    bad = {"scale_free_space": {"geometry": {"causes": {"t_h_over_a_of": {"creep": th}}}}}
+    out = snakemake(workdir, "-n", *write_config(workdir, "bad_own_th", bad)[:2], check=False)
+    assert "t_h_over_a_of: 'creep' is not in causes.names" in out
+
+
 def test_the_neo_hookean_geometry_in_jobs_of_one_t_h_node_solves_only_new_nodes(workdir):
     # a grid extended by t_h/a nodes: with one node a job, the shipped space's jobs
     # are unpacked, the new nodes' jobs alone are solved

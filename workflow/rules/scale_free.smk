@@ -94,12 +94,14 @@ if SF.get("geometry"):
             if _name not in SF_CAUSES or SF_CAUSES[_name].geometric:
                 raise ValueError(f"causes.names: {_name!r} is not a cause of the space other "
                                  "than a thickness (those are neo-Hookean rays)")
-            _own = (_gc.get("t_d_over_a_of") or {}).get(_name)
+            _own = {axis: (_gc.get(f"{axis}_of") or {}).get(_name)
+                    for axis in ("t_d_over_a", "t_h_over_a")}
             SF_GEOMETRY[_name] = (SF_CAUSES[_name], GeometryGrid.from_config(
-                {**_gc, "t_d_over_a": _own} if _own else _gc))
-        for _name in _gc.get("t_d_over_a_of") or {}:
-            if _name not in _gc.get("names", []):
-                raise ValueError(f"causes.t_d_over_a_of: {_name!r} is not in causes.names")
+                {**_gc, **{k: v for k, v in _own.items() if v}}))
+        for _key in ("t_d_over_a_of", "t_h_over_a_of"):
+            for _name in _gc.get(_key) or {}:
+                if _name not in _gc.get("names", []):
+                    raise ValueError(f"causes.{_key}: {_name!r} is not in causes.names")
     except ValueError as err:
         raise _config_error("scale_free_space.geometry", err)
 SF_GEOMETRY_DIR = f"{SF_DIR}/{GEOMETRY_FOLDER}"
