@@ -5,10 +5,12 @@
         [--tolerance 0.01] [--space-dir DIR] [--aperture 2,8] [--t-d 0.5,2.5] [--t-h 0.5,10]
 
 Draws random geometries (aperture uniform in 2-8 mm, t_d uniform in 0.5-2.5 mm,
-t_h log-uniform in 0.5-10 mm; narrower ranges with --aperture, --t-d, --t-h) and, at each, random X1h/X1d nodes; reads the cause's
-rays there at every node of the cause (skinsuction.space.OnDemandRays, the geometry
-spaces beside --space-dir: by default the workflow's build, else the shipped one) and solves the same rays directly (geometry=None, a cache of their
-own). Prints the largest relative error of M along each ray (over the loads where
+t_h log-uniform in 0.5-10 mm; narrower ranges with --aperture, --t-d, --t-h) and, at
+each, random X1h/X1d nodes; reads the cause's rays there at every node of the cause
+(skinsuction.space.OnDemandRays, the geometry spaces beside --space-dir: by default
+the workflow's build, else the shipped one; a copy, not a link, since a link is
+followed to its target's folder) and solves the same rays directly (geometry=None, a
+cache of their own). Prints the largest relative error of M along each ray (over the loads where
 both exist): percentiles overall, per aperture band and per cause node, for the
 rays read (the default tolerance) and for the grid alone (every ray read whatever
 its error estimate); then the error at every load read, pooled (the statistic of
@@ -32,8 +34,7 @@ _CTX = {}
 
 
 def _init(cause_name, cache, tolerance, space_dir):
-    from skinsuction.space import BASELINE, OnDemandRays, read_ray_spaces
-    from skinsuction.space._geometry_files import geometry_file_for
+    from skinsuction.space import BASELINE, OnDemandRays, geometry_file_for, read_ray_spaces
 
     spaces = read_ray_spaces(space_dir)
     spec = spaces[BASELINE].spec
