@@ -6,8 +6,8 @@ Every mode-1 fit is corrected by FE time solves at the fit
 (:func:`skinsuction.identify.fe_corrected_fit`, two per curve by default). A
 Cutometer samples at 100 Hz: a step at every sample is 1 000 steps for 10 s. The
 suction is linear between the breaks of its slope, so steps graded from each
-break (1 ms, growing by 1.5, at most 0.15 s; before 29 November 2026 by 1.25 to
-0.1 s) follow the same load path; the samples are then read by PCHIP between
+break (2 ms, doubling, at most 0.2 s; before 7 December 2026 1 ms growing by 1.5
+to 0.15 s) follow the same load path; the samples are then read by PCHIP between
 breaks. For skins of the layers study and the published face values (creep with
 and without stiffening; 2 and 8 mm probes; mode 1, 3 s on / 2 s off, 2 cycles),
 prints the steps, the CPU of each solve and the largest difference at the
@@ -30,8 +30,8 @@ SKINS = {  # name: (X1d, X1h, X2d MPa, g, tau s, probe mm, suction mbar)
     "8 mm, strong creep + stiffening": (0.046, 1.15e-3, 0.367, [0.73], [0.76], 8.0, 400.0),
 }
 
-#: The grading before 29 November 2026: (first step s, growth, largest step s).
-PREVIOUS_GRADING = (1e-3, 1.25, 0.1)
+#: The grading before 7 December 2026: (first step s, growth, largest step s).
+PREVIOUS_GRADING = (1e-3, 1.5, 0.15)
 
 
 def main(argv=None):

@@ -71,10 +71,9 @@ def test_the_correction_recovers_the_skin_the_fast_path_misses(fe_curves):
 
 
 def test_graded_steps_give_the_solve_at_every_sample(fe_curves):
-    """The correction's FE solves step 1 ms after each switch, growing by 1.5 to 0.15 s,
-    and read the samples by PCHIP: the same curve as a step at every sample, to a
-    fifteenth of the 3 µm noise; a finer grading comes nearer (the time scheme is
-    second order)."""
+    """The correction's FE solves step 2 ms after each switch, doubling to 0.2 s, and
+    read the samples by PCHIP: the same curve as a step at every sample, to a tenth of
+    the 3 µm noise; a finer grading comes nearer (the time scheme is second order)."""
     from skinsuction.identify._time_correction import fe_time_curve
     from skinsuction.space import load_space
 
@@ -84,9 +83,10 @@ def test_graded_steps_give_the_solve_at_every_sample(fe_curves):
     mesh = {"refinement": 0.5}
     samples = fe_time_curve(skin, d, mesh, steps="samples")
     graded = fe_time_curve(skin, d, mesh, steps="graded")
-    finer = fe_time_curve(skin, d, mesh, steps="graded", grading=(1e-3, 1.25, 0.1))
+    finer = fe_time_curve(skin, d, mesh, steps="graded", grading=(1e-3, 1.5, 0.1))
     error, finer_error = (1e3 * np.abs(m - samples).max() for m in (graded, finer))
-    assert error < 0.2  # µm, against 3 µm noise
+    print(f"graded {error:.3f} µm, finer {finer_error:.3f} µm")
+    assert error < 0.3  # µm, against 3 µm noise
     assert finer_error < 0.6 * error
     assert 1e3 * samples.max() > 500  # a large deflection, strong creep: not a trivial case
     with pytest.raises(ValueError, match="graded"):

@@ -31,13 +31,14 @@ __all__ = ["time_fit_skin", "fe_time_curve", "fe_corrected_fit", "FittedTimeMode
 #: Steps after each switch of the suction (s): 1 ms doubling, as the virtual experiments.
 GRADED_STEPS_S = 1e-3 * 2.0 ** np.arange(6)
 
-#: The graded steps of :func:`fe_time_curve`: 1 ms after each break of the suction's
-#: slope, growing by 1.5 to at most 0.15 s.  Between breaks the suction is linear, so
-#: the load path is the samples' own; a mode-1 curve of 10.5 s at 100 Hz takes 145
-#: steps instead of about 1 100, and differs from the solve at every sample by at most
-#: 0.12 µm, a twenty-fifth of a Cutometer's 3 µm quantisation noise
-#: (benchmarks/time_correction_steps.py; growing by 1.25 to 0.1 s, 215 steps, 0.05 µm).
-FIRST_STEP_S, STEP_GROWTH, MAX_STEP_S = 1e-3, 1.5, 0.15
+#: The graded steps of :func:`fe_time_curve`: 2 ms after each break of the suction's
+#: slope, doubling to at most 0.2 s.  Between breaks the suction is linear, so the load
+#: path is the samples' own; a mode-1 curve of 10.5 s at 100 Hz takes 96 steps instead
+#: of about 1 100, and differs from the solve at every sample by at most 0.22 µm, a
+#: fourteenth of a Cutometer's 3 µm quantisation noise (benchmarks/time_correction_steps.py;
+#: growing by 1.5 to 0.15 s until 7 December 2026: 145 steps, 0.12 µm, a third more
+#: Newton iterations).
+FIRST_STEP_S, STEP_GROWTH, MAX_STEP_S = 2e-3, 2.0, 0.2
 
 
 class FittedTimeModel(NamedTuple):
@@ -101,12 +102,12 @@ def solve_times(time_s, breaks, grading=None) -> np.ndarray:
 
     Examples
     --------
-    One second of constant suction: 19 steps instead of a sample's each, the
-    largest 0.15 s:
+    One second of constant suction: 12 steps instead of a sample's each, the
+    largest 0.2 s:
 
     >>> t = solve_times([0.0, 0.5, 1.0], [0, 2])
     >>> t.size, t[:4].round(5).tolist(), float(np.diff(t).max().round(3))
-    (19, [0.0, 0.001, 0.0025, 0.00475], 0.15)
+    (12, [0.0, 0.002, 0.006, 0.014], 0.2)
     """
     first, growth, largest = grading or (FIRST_STEP_S, STEP_GROWTH, MAX_STEP_S)
     t = np.asarray(time_s, dtype=float)
