@@ -15,6 +15,9 @@ both exist): percentiles overall, per aperture band and per cause node, for the
 rays read (the default tolerance) and for the grid alone (every ray read whatever
 its error estimate); then the error at every load read, pooled (the statistic of
 the neo-Hookean tables); the rays that fell back to FE, and the CPU of both ways.
+Last, whether the error estimate can be trusted: per band of t_h/a, the grid's
+estimate of each ray against its error (|log M| against FE, loads up to M = 1.5 mm,
+what a fit reads): how often the estimate is under the error, and their ratio.
 Asserts nothing.
 """
 
@@ -31,6 +34,7 @@ import pandas as pd
 from _pool import mm_range
 
 _CTX = {}
+CAP_MM = 1.5  # the estimate is weighed over the loads up to this deflection
 
 
 def _init(cause_name, cache, tolerance, space_dir):
@@ -60,6 +64,7 @@ def _run(job):
     t0 = time.process_time()
     solved, _ = _CTX["solved"].rays(probe, layers, cause, ratio_nodes=nodes)
     solved_cpu = time.process_time() - t0
+    space, a = _CTX["read"].cause_geometry(cause), probe / 2
     out = []
     for k, r in enumerate(nodes):
         for j, c in enumerate(cause.nodes):
@@ -70,10 +75,17 @@ def _run(job):
             e = np.abs(read[k, j, ok] / solved[k, j, ok] - 1)
             okr = np.isfinite(raw[k, j]) & np.isfinite(solved[k, j]) & (solved[k, j] > 0)
             er = np.abs(raw[k, j, okr] / solved[k, j, okr] - 1)
+            low = okr & (solved[k, j] <= CAP_MM)  # the loads a fit reads
+            est = (space.rays(2.0, t_d / a, t_h / a, [r], c, deflection_cap=CAP_MM / a)[1]
+                   ["error_estimate"][0] if space.grid.covers(t_d / a, t_h / a) else math.nan)
+            el = np.abs(np.log(raw[k, j, low] / solved[k, j, low]))
             out.append({"probe_mm": probe, "t_d": t_d, "t_h": t_h, "ratio": r, "node": c,
                         "load_errors": e.tolist(),
                         "max_error": float(e.max()) if e.size else math.nan,
                         "raw_max_error": float(er.max()) if er.size else math.nan,
+                        "estimate": float(est),
+                        "error_to_cap": float(el.max()) if el.size else math.nan,
+                        "th_a": t_h / a,
                         "loads_read": int(ok.sum()), "loads_fe": n_fe,
                         "rays_solved": info.get("rays_solved", 0),
                         "read_cpu_s": read_cpu, "solved_cpu_s": solved_cpu})
@@ -149,6 +161,13 @@ def main(argv=None):
           "solved by FE")
     print(f"CPU per geometry (median): read {per_geom['read_cpu_s'].median():.3f} s, "
           f"solved {per_geom['solved_cpu_s'].median():.1f} s")
+    print(f"the grid's error estimate against its error (loads up to M = {CAP_MM:g} mm): "
+          "rays, estimate under the error, median estimate / error, error 95th pct")
+    bins = pd.cut(df["th_a"], [0, 0.09, 0.125, 0.2, 0.5, np.inf])
+    for band, g in df[df["error_to_cap"] > 0].groupby(bins, observed=True):
+        ratio = g["estimate"] / g["error_to_cap"]
+        print(f"  t_h/a {band}: {len(g)} rays, {int((ratio < 1).sum())} under, "
+              f"{ratio.median():.2f}, {100 * g['error_to_cap'].quantile(0.95):.2f} %")
 
 
 if __name__ == "__main__":
