@@ -156,7 +156,8 @@ def test_a_cause_with_t_d_nodes_of_its_own_has_a_job_a_node_and_unpacks_the_ship
                     "results/simulated_space/scale_free/geometry/strain_stiffening.parquet")
     # one job per (t_d/a, t_h/a) node, as pre-tension's (t_h_per_job)
     assert causes["t_h_per_job"]["strain_stiffening"] == 1
-    assert job_counts(out)["simulate_geometry_bundle"] == len(own) * len(causes["t_h_over_a"])
+    own_th = causes.get("t_h_over_a_of", {}).get("strain_stiffening", causes["t_h_over_a"])
+    assert job_counts(out)["simulate_geometry_bundle"] == len(own) * len(own_th)
     assert "strain_stiffening__td0.7354__th0.2182" in out
     out = snakemake(workdir, "-n", "logs/scale_free/geometry/unpack_strain_stiffening.json")
     assert job_counts(out) == {"unpack_geometry_space": 1}
@@ -167,20 +168,23 @@ def test_a_cause_with_t_d_nodes_of_its_own_has_a_job_a_node_and_unpacks_the_ship
 
 
 def test_a_cause_with_t_h_nodes_of_its_own_solves_them_alone(workdir):
-    # one cause's thin corner built before the other's: its own t_h/a nodes
+    # one cause's thin corner built before the other's: its own t_h/a nodes (pre-tension
+    # here; stiffening has its own in the config), the other cause's untouched
     causes = yaml.safe_load((workdir / "config" / "config.yaml").read_text())[
         "scale_free_space"]["geometry"]["causes"]
     th = sorted([0.0862, *causes["t_h_over_a"]])
     overlay = {"scale_free_space": {"geometry": {"causes": {
-        "t_h_over_a_of": {"strain_stiffening": th}}}}}
+        "t_h_over_a_of": {"pre_tension": th}}}}}
     args = write_config(workdir, "own_th", overlay)[:2]
     rays = "results/simulated_space/scale_free/geometry"
-    out = snakemake(workdir, "-n", f"{rays}/strain_stiffening.parquet", *args)
-    own = causes["t_d_over_a_of"]["strain_stiffening"]
-    assert job_counts(out)["simulate_geometry_bundle"] == len(own) * len(th)
-    assert "strain_stiffening__td0.7354__th0.0862" in out
     out = snakemake(workdir, "-n", f"{rays}/pre_tension.parquet", *args)
-    assert "__th0.0862" not in out
+    own = causes["t_d_over_a_of"]["pre_tension"]
+    assert job_counts(out)["simulate_geometry_bundle"] == len(own) * len(th)
+    assert "pre_tension__td0.7354__th0.0862" in out
+    out = snakemake(workdir, "-n", f"{rays}/strain_stiffening.parquet", *args)
+    own_ss = causes["t_d_over_a_of"]["strain_stiffening"]
+    own_ss_th = causes["t_h_over_a_of"]["strain_stiffening"]
+    assert job_counts(out)["simulate_geometry_bundle"] == len(own_ss) * len(own_ss_th)
     bad = {"scale_free_space": {"geometry": {"causes": {"t_h_over_a_of": {"creep": th}}}}}
     out = snakemake(workdir, "-n", *write_config(workdir, "bad_own_th", bad)[:2], check=False)
     assert "t_h_over_a_of: 'creep' is not in causes.names" in out
