@@ -14,7 +14,8 @@ cache of their own). Prints the largest relative error of M along each ray (over
 both exist): percentiles overall, per aperture band and per cause node, for the
 rays read (the default tolerance) and for the grid alone (every ray read whatever
 its error estimate); then the error at every load read, pooled (the statistic of
-the neo-Hookean tables); the rays that fell back to FE, and the CPU of both ways.
+the neo-Hookean tables); the rays that fell back to FE (an error estimate over the
+tolerance, or a geometry outside the grid), and the CPU of both ways.
 Last, whether the error estimate can be trusted: per band of t_h/a, the grid's
 estimate of each ray against its error (|log M| against FE, loads up to M = 1.5 mm,
 what a fit reads): how often the estimate is under the error, and their ratio.
@@ -88,6 +89,7 @@ def _run(job):
                         "th_a": t_h / a,
                         "loads_read": int(ok.sum()), "loads_fe": n_fe,
                         "rays_solved": info.get("rays_solved", 0),
+                        "outside_grid": not space.grid.covers(t_d / a, t_h / a),
                         "read_cpu_s": read_cpu, "solved_cpu_s": solved_cpu})
     return out
 
@@ -157,7 +159,7 @@ def main(argv=None):
         print(f"  node {node:g}: read {pct(g['max_error'])}")
     per_geom = df.drop_duplicates(["probe_mm", "t_d", "t_h"])
     print(f"rays solved at the tolerance {a.tolerance:g}: {int(per_geom['rays_solved'].sum())} of "
-          f"{len(df)}; loads read {int(df['loads_read'].sum())} of {int(df['loads_fe'].sum())} "
+          f"{len(df)}, and {int(df['outside_grid'].sum())} outside the grid; loads read {int(df['loads_read'].sum())} of {int(df['loads_fe'].sum())} "
           "solved by FE")
     print(f"CPU per geometry (median): read {per_geom['read_cpu_s'].median():.3f} s, "
           f"solved {per_geom['solved_cpu_s'].median():.1f} s")
