@@ -66,6 +66,7 @@ def _run(job):
     solved, _ = _CTX["solved"].rays(probe, layers, cause, ratio_nodes=nodes)
     solved_cpu = time.process_time() - t0
     space, a = _CTX["read"].cause_geometry(cause), probe / 2
+    inside = space.grid.covers(t_d / a, t_h / a)
     out = []
     for k, r in enumerate(nodes):
         for j, c in enumerate(cause.nodes):
@@ -78,7 +79,7 @@ def _run(job):
             er = np.abs(raw[k, j, okr] / solved[k, j, okr] - 1)
             low = okr & (solved[k, j] <= CAP_MM)  # the loads a fit reads
             est = (space.rays(2.0, t_d / a, t_h / a, [r], c, deflection_cap=CAP_MM / a)[1]
-                   ["error_estimate"][0] if space.grid.covers(t_d / a, t_h / a) else math.nan)
+                   ["error_estimate"][0] if inside else math.nan)
             el = np.abs(np.log(raw[k, j, low] / solved[k, j, low]))
             out.append({"probe_mm": probe, "t_d": t_d, "t_h": t_h, "ratio": r, "node": c,
                         "load_errors": e.tolist(),
@@ -89,7 +90,7 @@ def _run(job):
                         "th_a": t_h / a,
                         "loads_read": int(ok.sum()), "loads_fe": n_fe,
                         "rays_solved": info.get("rays_solved", 0),
-                        "outside_grid": not space.grid.covers(t_d / a, t_h / a),
+                        "outside_grid": not inside,
                         "read_cpu_s": read_cpu, "solved_cpu_s": solved_cpu})
     return out
 
@@ -159,8 +160,8 @@ def main(argv=None):
         print(f"  node {node:g}: read {pct(g['max_error'])}")
     per_geom = df.drop_duplicates(["probe_mm", "t_d", "t_h"])
     print(f"rays solved at the tolerance {a.tolerance:g}: {int(per_geom['rays_solved'].sum())} of "
-          f"{len(df)}, and {int(df['outside_grid'].sum())} outside the grid; loads read {int(df['loads_read'].sum())} of {int(df['loads_fe'].sum())} "
-          "solved by FE")
+          f"{len(df)}, and {int(df['outside_grid'].sum())} outside the grid; loads read "
+          f"{int(df['loads_read'].sum())} of {int(df['loads_fe'].sum())} solved by FE")
     print(f"CPU per geometry (median): read {per_geom['read_cpu_s'].median():.3f} s, "
           f"solved {per_geom['solved_cpu_s'].median():.1f} s")
     print(f"the grid's error estimate against its error (loads up to M = {CAP_MM:g} mm): "

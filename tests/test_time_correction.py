@@ -85,7 +85,6 @@ def test_graded_steps_give_the_solve_at_every_sample(fe_curves):
     graded = fe_time_curve(skin, d, mesh, steps="graded")
     finer = fe_time_curve(skin, d, mesh, steps="graded", grading=(1e-3, 1.5, 0.1))
     error, finer_error = (1e3 * np.abs(m - samples).max() for m in (graded, finer))
-    print(f"graded {error:.3f} µm, finer {finer_error:.3f} µm")
     assert error < 0.3  # µm, against 3 µm noise
     assert finer_error < 0.6 * error
     assert 1e3 * samples.max() > 500  # a large deflection, strong creep: not a trivial case
