@@ -254,6 +254,72 @@ def test_a_ramp_estimate_moves_to_the_thickness_its_curves_prefer(t_d, given, tm
     assert r["skin"]["layers"][0]["thickness"] == pytest.approx(rec["estimate_at_mm"])
 
 
+def test_a_windowed_table_reads_the_whole_tables_values_inside_and_nan_outside(tmp_path):
+    """A fit at another thickness reads its tables near the estimate only: inside the
+    window every value is the whole table's, bit for bit (the same nodes and stencils);
+    outside it is NaN and counted, so that the fit can be redone on the whole table."""
+    from skinsuction.space import load_space
+    from skinsuction.space._shipped import default_space_dir
+
+    space = load_space(default_space_dir(), cache_dir=tmp_path / "cache")
+    whole_slice = space.read_only_at(Geometry(1.2, 2.5), [6.0]).probe(6.0)
+    p = np.arange(0.0, 101.0, 2.0)
+    whole = whole_slice.interpolant_at(p)
+    near_slice = whole_slice.windowed(-1.9, -1.5)
+    near = near_slice.interpolant_at(p)
+    rng = np.random.default_rng(0)
+    inside = np.column_stack([rng.uniform(-1.9, -1.5, 200),
+                              rng.uniform(whole.lower[1], whole.upper[1], 200)])
+    np.testing.assert_array_equal(near(inside), whole(inside))
+    assert near_slice.read_outside() == 0 and whole_slice.read_outside() == 0
+    outside = inside.copy()
+    outside[:, 0] += np.where(np.arange(200) % 2, 0.5, -0.5)
+    assert np.isnan(near(outside)[:, 1:]).all()
+    assert np.isfinite(whole(outside)[:, 1:]).any()
+    assert near_slice.read_outside() == 200
+    assert np.array_equal(near.lower, whole.lower) and np.array_equal(near.upper, whole.upper)
+
+
+def test_fits_at_other_thicknesses_are_those_on_the_whole_tables(tmp_path, monkeypatch):
+    """The fits at the thickness brackets and along the posterior polish on tables of
+    the X1d window near the estimate; a polish that reads outside is redone on the
+    whole tables.  Either way the ramp's estimate, intervals and thickness record are
+    those of the whole tables, to the last digit."""
+    from skinsuction.identify import _ramp_intervals
+    from skinsuction.identify.measured_fit import identify_data
+    from skinsuction.space import load_space
+    from skinsuction.space._shipped import default_space_dir
+
+    space = load_space(default_space_dir(), cache_dir=tmp_path / "cache")
+    geometry = Geometry(0.9, 2.0)
+    p = np.arange(0.0, 101.0, 2.0)
+    rng = np.random.default_rng(4)
+    lines = ["# dermis_thickness_mm: 0.95", "# dermis_thickness_sd_mm: 0.1",
+             "# hypodermis_thickness_mm: 2", "# hypodermis_thickness_sd_mm: 0.1",
+             "probe_mm,pressure_mbar,deflection_mm"]
+    for probe in (2.0, 6.0):
+        m = space.read_only_at(geometry, [probe]).probe(probe).interpolant_at(p)(
+            [[math.log10(0.02), math.log10(0.05)]])[0] + rng.normal(0.0, 1e-3, p.size)
+        lines += [f"{probe:g},{a:g},{b:.6f}" for a, b in zip(p, m)]
+    path = tmp_path / "ramp.csv"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    polishes, results = [], {}
+    real_polish = _ramp_intervals.polish
+    for w in (1e3, 0.3, 0.002):  # the whole tables; the default window; a narrow one
+        monkeypatch.setattr(_ramp_intervals, "POLISH_WINDOW_DECADES", w)
+        calls = []
+        monkeypatch.setattr(_ramp_intervals, "polish",
+                            lambda *a, **k: calls.append(1) or real_polish(*a, **k))
+        r = identify_data(load_measured(path), space, objective="weighted", repeats=2, seed=0)
+        polishes.append(len(calls))
+        results[w] = (r["estimate"], r["intervals"]["X1d"], r["intervals"]["X1h"],
+                      r["geometry"]["thickness_uncertainty"])
+    assert results[0.3] == results[1e3] and results[0.002] == results[1e3]
+    # the whole tables and the default window: one polish a fit; the narrow window
+    # redoes those that moved X1d by more than a node or so
+    assert polishes[0] == polishes[1] > 10 and polishes[0] + 5 < polishes[2]
+
+
 def test_a_given_sd_at_the_papers_layers_brackets_the_tailed_rays_without_their_tail():
     """At 1 mm layers the shipped rays run on into the load tail; the brackets at ±1 sd
     come from rays on demand, which stop where the tail starts.  A candidate beyond

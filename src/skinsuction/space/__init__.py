@@ -30,6 +30,8 @@ Modules:
 * ``_rays``: which rays a scale-free space has (ids, :class:`RaySpec`, FE jobs);
 * ``_ray_space``: the rays stored and read back (:class:`RaySpace`);
 * ``_ray_solve``, ``_ray_interpolate``: the rays solved and interpolated;
+* ``_neo_hookean_slice``: the neo-Hookean rays of one probe, tabulated per protocol
+  for the identification;
 * ``_pairs``, ``_pair_interpolate``: spaces of two causes at once, and read off
   their nodes;
 * ``_on_demand``: rays at a measurement's own probe and layers, solved on
@@ -91,7 +93,8 @@ from ._load_axis import LoadAxis
 from ._coordinates import SpaceCoordinates, load, reference_pressure, similar_length
 from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
 from ._open import GEOMETRIES_KEPT, LoadedSpace, ProbeSpace, load_space
-from ._ray_interpolate import NeoHookeanSlice, RayInterpolant, TabulatedInterpolant, read_at_once
+from ._neo_hookean_slice import NeoHookeanSlice, TabulatedInterpolant
+from ._ray_interpolate import RayInterpolant, read_at_once
 from ._pair_interpolate import PairRayInterpolant, interpolant
 from ._pairs import (
     PAIRS_FOLDER,

@@ -22,7 +22,7 @@ from ._grid import read_space
 from ._interpolate import GriddedSpace
 from ._on_demand import OnDemandRays
 from ._probe_space import ProbeSpace
-from ._ray_interpolate import NeoHookeanSlice
+from ._neo_hookean_slice import NeoHookeanSlice
 from ._ray_space import read_ray_space, read_ray_spaces
 from ._shipped import resolve_space
 

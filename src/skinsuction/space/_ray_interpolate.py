@@ -3,10 +3,8 @@
 Across rays, cubic Lagrange in ``log10 r`` (r = X1h/X1d) and in the cause's
 axis coordinate, on ``log M``; along the load of a ray, cubic Lagrange on log M
 in log q, ``q = p / X1d`` (:class:`skinsuction.space._load_axis.LoadAxis`;
-:class:`RayInterpolant`).  :class:`NeoHookeanSlice` is the
-neo-Hookean space of one probe in the shape the identification asks of every
-layout (:class:`skinsuction.space.ProbeSpace`), tabulated once per pressure
-protocol (:class:`TabulatedInterpolant`).
+:class:`RayInterpolant`).  The neo-Hookean space of one probe, tabulated for the
+identification, is in :mod:`._neo_hookean_slice`.
 """
 
 from __future__ import annotations
@@ -16,12 +14,11 @@ import math
 import numpy as np
 
 from ._coordinates import reference_pressure
-from ._interpolate import GriddedSpace, SpaceInterpolant
 from ._lagrange import LagrangeAxis
 from ._load_axis import LoadAxis
 from ._ray_space import RaySpace
 
-__all__ = ["RayInterpolant", "NeoHookeanSlice", "TabulatedInterpolant", "read_at_once"]
+__all__ = ["RayInterpolant", "read_at_once"]
 
 
 def _alternative_starts(axis: LagrangeAxis, x, centred):
@@ -268,189 +265,3 @@ def read_at_once(calls) -> list:
             stencils = first._load.stencils_of(q, g.shape)
         out.append(f._load.evaluate_at(g, stencils))
     return out
-
-
-class NeoHookeanSlice:
-    """The neo-Hookean scale-free space of one probe, for the identification objectives.
-
-    What :class:`skinsuction.identify.SingleObjective` needs of a space: a
-    probe, an interpolant at the measured pressures and the map of its
-    candidates to moduli.  The candidates are ``theta = (log10 X1d, log10 X1h/X1d)``,
-    so the window focusing samples decades evenly and the window is the box of
-    the space (the X1d window of the configuration, its lower end raised to
-    ``p_max / load_max``).
-
-    Parameters
-    ----------
-    space : RaySpace
-        The neo-Hookean space (or a cause's space, whose neutral rays are used).
-    probe_mm : float
-    """
-
-    layout = "scale_free"
-    coordinates = ("log10 X1d", "log10 X1h/X1d")
-
-    def __init__(self, space: RaySpace, probe_mm: float):
-        self.space = space.null_slice()
-        self.space.rays(probe_mm)  # KeyError naming the probes if absent
-        self.probe_mm = float(probe_mm)
-
-    @property
-    def pressure_range(self) -> tuple[float, float]:
-        """Pressures (mbar) a measured curve may span: up to the space's reach."""
-        return 0.0, float(self.space.spec.reach_mbar())
-
-    def range_note(self) -> str:
-        """What sets :attr:`pressure_range`, for error messages.
-
-        Returns
-        -------
-        str
-        """
-        sp = self.space.spec
-        return (f"the reach of the scale-free space: p/X1d <= {sp.load_max:g} mbar/MPa "
-                f"up to X1d = {sp.x1d_range[1]:g} MPa")
-
-    def interpolant_at(self, pressure_mbar, nan_policy: str = "shift") -> "TabulatedInterpolant":
-        """The space at fixed pressures (candidates theta), tabulated once per protocol.
-
-        Parameters
-        ----------
-        pressure_mbar : array_like, shape (u,)
-            The measured pressures (mbar).
-        nan_policy : {"shift"}
-            Only the NaN policy "shift" is implemented for the scale-free layout.
-
-        Returns
-        -------
-        TabulatedInterpolant
-            Shared by every call with the same pressures (the last 16 protocols).
-        """
-        if nan_policy != "shift":
-            raise ValueError(f"nan_policy {nan_policy!r}: the scale-free space uses 'shift'")
-        # a study measures every subject with the same protocol: tabulate it once
-        p = np.asarray(pressure_mbar, dtype=float)
-        key = p.tobytes()
-        cache = self.__dict__.setdefault("_tables", {})
-        if key not in cache:
-            if len(cache) >= 16:
-                cache.pop(next(iter(cache)))
-            cache[key] = TabulatedInterpolant(self.space, self.probe_mm, p)
-        return cache[key]
-
-    @staticmethod
-    def to_moduli(theta) -> np.ndarray:
-        """X1d, X1h in MPa of candidates theta.
-
-        Parameters
-        ----------
-        theta : array_like, shape (N, 2) or (2,)
-            Candidates ``(log10 X1d, log10 X1h/X1d)``.
-
-        Returns
-        -------
-        ndarray, shape (N, 2)
-        """
-        t = np.atleast_2d(np.asarray(theta, dtype=float))
-        x1d = 10.0 ** t[:, 0]
-        return np.stack([x1d, x1d * 10.0 ** t[:, 1]], axis=1)
-
-    @staticmethod
-    def from_moduli(x) -> np.ndarray:
-        """Candidates theta of moduli (inverse of :meth:`to_moduli`).
-
-        Parameters
-        ----------
-        x : array_like, shape (N, 2) or (2,)
-            X1d, X1h in MPa.
-
-        Returns
-        -------
-        ndarray, shape (N, 2)
-            ``(log10 X1d, log10 X1h/X1d)``.
-        """
-        x = np.atleast_2d(np.asarray(x, dtype=float))
-        return np.stack([np.log10(x[:, 0]), np.log10(x[:, 1] / x[:, 0])], axis=1)
-
-
-class TabulatedInterpolant:
-    """The neo-Hookean space of one probe at fixed pressures, tabulated for speed.
-
-    The rays are read once (:class:`RayInterpolant`) on a fine grid of
-    ``log10 X1d`` (``step`` decades, over the X1d window) times the ratio nodes,
-    at the measured pressures; candidates are then interpolated by the 4 x 4
-    cubic stencils of the identification (:class:`skinsuction.identify.SpaceInterpolant`,
-    NaN policy "shift") on ``log M``, exactly as the paper grid is, so one
-    iteration of the window focusing costs what it costs on the paper grid.
-    Along log X1d the table is much finer than M varies (0.01 decades: M moves
-    by about 2 % between nodes), so it adds an error far below the rays' own.
-
-    Parameters
-    ----------
-    space : RaySpace
-        The neo-Hookean space.
-    probe_mm : float
-    pressure_mbar : array_like (u,)
-        The measured pressures (mbar).
-    step : float
-        Spacing of the table in log10 X1d (decades).
-
-    Attributes
-    ----------
-    lower, upper : ndarray (2,)
-        Bounds of theta = (log10 X1d, log10 X1h/X1d), as :class:`RayInterpolant`'s.
-    """
-
-    def __init__(self, space: RaySpace, probe_mm: float, pressure_mbar, step: float = 0.01):
-        rays = RayInterpolant(space, probe_mm, pressure_mbar)
-        if rays.d != 2:
-            raise ValueError("only the neo-Hookean space is tabulated")
-        self.lower, self.upper = rays.lower, rays.upper
-        self.pressure_mbar = rays.pressure_mbar
-        n = max(4, int(math.ceil((self.upper[0] - self.lower[0]) / step)) + 1)
-        lx = np.linspace(self.lower[0], self.upper[0], n)
-        lr = np.log10(np.asarray(space.spec.ratio_nodes))
-        grid = np.stack(np.meshgrid(lx, lr, indexing="ij"), axis=-1).reshape(-1, 2)
-        self._pos = self.pressure_mbar > 0
-        # in chunks: a 2000-point curve on the whole table is 1e7 values per stencil node
-        chunk = max(16, 2_000_000 // max(self.pressure_mbar.size, 1))
-        m = np.concatenate([rays(grid[i:i + chunk]) for i in range(0, grid.shape[0], chunk)])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            g = np.log(m[:, self._pos])
-        g[~np.isfinite(g)] = np.nan
-        table = GriddedSpace(lx, lr, self.pressure_mbar[self._pos],
-                             g.reshape(n, lr.size, -1), probe_mm)
-        self._log_m = SpaceInterpolant(table, "shift")
-        # the usual protocol has p = 0 first (or not at all): a slice, not a mask
-        first = int(np.argmax(self._pos)) if self._pos.any() else self._pos.size
-        self._positive = slice(first, None) if self._pos[first:].all() else self._pos
-        self._buffer = np.empty((0, int(self._pos.sum())))
-
-    def __call__(self, candidates, out=None) -> np.ndarray:
-        """The deflections of candidates at the tabulated pressures.
-
-        Parameters
-        ----------
-        candidates : array_like, shape (N, 2) or (2,)
-            Candidates ``(log10 X1d, log10 X1h/X1d)``.
-        out : ndarray, shape (N, u), optional
-            Receives the result.
-
-        Returns
-        -------
-        ndarray, shape (N, u)
-            Deflections (mm), 0 at p = 0.
-        """
-        cand = np.atleast_2d(np.asarray(candidates, dtype=float))
-        n = cand.shape[0]
-        if out is None:
-            out = np.empty((n, self.pressure_mbar.size))
-        out[:, ~self._pos] = 0.0
-        if self._buffer.shape[0] < n:
-            self._buffer = np.empty((n, self._buffer.shape[1]))
-        log_m = self._log_m(cand, out=self._buffer[:n])
-        if isinstance(self._positive, slice):
-            np.exp(log_m, out=out[:, self._positive])
-        else:
-            out[:, self._positive] = np.exp(log_m)
-        return out
