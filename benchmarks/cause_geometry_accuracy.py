@@ -16,7 +16,7 @@ rays read (the default tolerance) and for the grid alone (every ray read whateve
 its error estimate); then the error at every load read, pooled (the statistic of
 the neo-Hookean tables); the rays that fell back to FE (an error estimate over the
 tolerance, or a geometry outside the grid), and the CPU of both ways.
-Last, whether the error estimate can be trusted: per band of t_h/a, the grid's
+Last, whether the error estimate can be trusted: per band of t_h/a and of t_d/a, the grid's
 estimate of each ray against its error (|log M| against FE, loads up to M = 1.5 mm,
 what a fit reads): how often the estimate is under the error, and their ratio.
 Asserts nothing.
@@ -166,11 +166,15 @@ def main(argv=None):
           f"solved {per_geom['solved_cpu_s'].median():.1f} s")
     print(f"the grid's error estimate against its error (loads up to M = {CAP_MM:g} mm): "
           "rays, estimate under the error, median estimate / error, error 95th pct")
-    bins = pd.cut(df["th_a"], [0, 0.09, 0.125, 0.2, 0.5, np.inf])
-    for band, g in df[df["error_to_cap"] > 0].groupby(bins, observed=True):
-        ratio = g["estimate"] / g["error_to_cap"]
-        print(f"  t_h/a {band}: {len(g)} rays, {int((ratio < 1).sum())} under, "
-              f"{ratio.median():.2f}, {100 * g['error_to_cap'].quantile(0.95):.2f} %")
+    df["td_a"] = df["t_d"] / (df["probe_mm"] / 2)
+    for axis, edges in (("th_a", [0, 0.09, 0.125, 0.2, 0.5, np.inf]),
+                        ("td_a", [0, 0.1, 0.125, 0.15, 0.2, 0.5, np.inf])):
+        bins = pd.cut(df[axis], edges)
+        for band, g in df[df["error_to_cap"] > 0].groupby(bins, observed=True):
+            ratio = g["estimate"] / g["error_to_cap"]
+            print(f"  {axis.replace('_a', '/a').replace('t', 't_', 1)} {band}: {len(g)} rays, "
+                  f"{int((ratio < 1).sum())} under, {ratio.median():.2f}, "
+                  f"{100 * g['error_to_cap'].quantile(0.95):.2f} %")
 
 
 if __name__ == "__main__":
