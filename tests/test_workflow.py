@@ -168,11 +168,12 @@ def test_a_cause_with_t_d_nodes_of_its_own_has_a_job_a_node_and_unpacks_the_ship
 
 
 def test_a_cause_with_t_h_nodes_of_its_own_solves_them_alone(workdir):
-    # one cause's thin corner built before the other's: its own t_h/a nodes (pre-tension
-    # here; stiffening has its own in the config), the other cause's untouched
+    # one cause's t_h/a node added before the other's (both causes have their own nodes
+    # in the config; 0.072 is in neither): its jobs alone, the other cause's untouched
     causes = yaml.safe_load((workdir / "config" / "config.yaml").read_text())[
         "scale_free_space"]["geometry"]["causes"]
-    th = sorted([0.0862, *causes["t_h_over_a"]])
+    assert all(0.072 not in v for v in causes["t_h_over_a_of"].values())
+    th = sorted([0.072, *causes["t_h_over_a_of"]["pre_tension"]])
     overlay = {"scale_free_space": {"geometry": {"causes": {
         "t_h_over_a_of": {"pre_tension": th}}}}}
     args = write_config(workdir, "own_th", overlay)[:2]
@@ -180,11 +181,12 @@ def test_a_cause_with_t_h_nodes_of_its_own_solves_them_alone(workdir):
     out = snakemake(workdir, "-n", f"{rays}/pre_tension.parquet", *args)
     own = causes["t_d_over_a_of"]["pre_tension"]
     assert job_counts(out)["simulate_geometry_bundle"] == len(own) * len(th)
-    assert "pre_tension__td0.7354__th0.0862" in out
+    assert "pre_tension__td0.7354__th0.072" in out
     out = snakemake(workdir, "-n", f"{rays}/strain_stiffening.parquet", *args)
     own_ss = causes["t_d_over_a_of"]["strain_stiffening"]
     own_ss_th = causes["t_h_over_a_of"]["strain_stiffening"]
     assert job_counts(out)["simulate_geometry_bundle"] == len(own_ss) * len(own_ss_th)
+    assert "__th0.072" not in out
     bad = {"scale_free_space": {"geometry": {"causes": {"t_h_over_a_of": {"creep": th}}}}}
     out = snakemake(workdir, "-n", *write_config(workdir, "bad_own_th", bad)[:2], check=False)
     assert "t_h_over_a_of: 'creep' is not in causes.names" in out
