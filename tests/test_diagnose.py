@@ -860,6 +860,63 @@ def test_causes_solved_in_a_window_around_the_baseline_fit_as_with_every_node(de
                for n in cut["geometry"]["notes"]), cut["geometry"]["notes"]
 
 
+class _ReadFirst(_WindowSolver):
+    """A solver whose causes' rays, read first, are ``error`` off away from the neutral
+    node (an interpolation error that grows with the load), as a geometry space's
+    can be over its tolerance; :meth:`deferring` gives that view, the solver itself
+    the exact rays."""
+
+    tolerance = 0.01
+
+    def __init__(self, spaces, error=0.0):
+        super().__init__(spaces)
+        self.error, self.deferred = error, []
+
+    def deferring(self):
+        return _ReadFirst(self.spaces, error=0.02)
+
+    def rays(self, probe, layers, cause=None, ratio_nodes=None, reads_up_to_mm=None):
+        a, info = super().rays(probe, layers, cause, ratio_nodes, reads_up_to_mm)
+        if cause is not None and self.error:
+            off = np.asarray(cause.nodes) != cause.neutral
+            ramp = np.linspace(0.0, 1.0, a.shape[-1])
+            a = a * (1 + self.error * off[None, :, None] * ramp)
+            self.deferred.append({"cause": cause.name, "rays": a.shape[0],
+                                  "largest_error_estimate": self.error})
+        return a, info
+
+
+def test_a_causes_rays_read_first_are_solved_where_its_fit_could_change_the_verdict():
+    from skinsuction.space import Geometry
+
+    spaces = toy_spaces(ratio_nodes=np.geomspace(0.001, 1.0, 13))
+    data = _toy_data(0.03, 0.02, 1.1, "pre_tension", 0.5, seed=3)
+    given = Geometry(1.2, 1.0, given=("t_d",))
+    strict = diagnose(data, spaces, Settings(cause_rays_margin_bic=None), geometry=given,
+                      on_demand=_ReadFirst(spaces))
+    first = diagnose(data, spaces, Settings(), geometry=given, on_demand=_ReadFirst(spaces))
+    assert first["verdict"] == strict["verdict"] == "cause_found"
+    assert first["cause"] == strict["cause"] == "pre_tension"
+    ref = {c["cause"]: c for c in strict["candidates"]}
+    assert all(c["rays_deferred"] is None for c in strict["candidates"])
+    by = {c["cause"]: c for c in first["candidates"]}
+    # pre-tension, decisive with its rays as read, is fitted again with them solved:
+    # the fit without the first look, from the same seeds
+    held = by["pre_tension"]["rays_deferred"]
+    assert held["solved"] and held["delta_bic_read"] < 2.0
+    assert by["pre_tension"]["parameters"] == ref["pre_tension"]["parameters"]
+    assert by["pre_tension"]["delta_bic"] == ref["pre_tension"]["delta_bic"]
+    assert first["extended"]["intervals"] == strict["extended"]["intervals"]
+    # stiffening, which the data do not ask for, is left as read, and the report says so
+    far = by["strain_stiffening"]["rays_deferred"]
+    assert not far["solved"] and far["delta_bic_read"] >= 2.0
+    assert by["strain_stiffening"]["delta_bic"] == far["delta_bic_read"]
+    assert any(n.startswith("strain_stiffening: ") and "not solved" in n
+               for n in first["geometry"]["notes"]), first["geometry"]["notes"]
+    assert by["strain_stiffening"]["delta_bic"] == pytest.approx(
+        ref["strain_stiffening"]["delta_bic"], abs=0.5)
+
+
 @pytest.mark.parametrize("tied, measurement, absent", [
     (["pre_tension", "hypodermis_thickness"], "hypodermis thickness", "the dermis thickness"),
     (["dermis_thickness", "pre_tension"], "dermis thickness", "hypodermis"),

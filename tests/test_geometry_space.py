@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from skinsuction.space import (
+    DeferredRays,
     GeometryGrid,
     GeometrySpace,
     OnDemandRays,
@@ -159,6 +160,34 @@ def test_the_error_estimate_bounds_the_error_and_rays_beyond_the_tolerance_are_s
     # at a node the shifted stencils agree: nothing to solve even at tolerance 0
     node = _layers(2 * coarse.grid.td_nodes[1], 2 * coarse.grid.th_nodes[2])
     assert strict.rays(4.0, node)[1]["rays_solved"] == 0
+
+
+def test_deferred_rays_beyond_the_tolerance_come_from_the_cache_else_stay_as_read(
+        fe_spaces, tmp_path):
+    """A diagnosis reads a cause's rays first: nothing is solved, what a strict solver
+    would have solved is listed, and rays solved before are taken as solved."""
+    _, coarse, _ = fe_spaces
+    layers = _layers(2.4, 3.0)
+    strict = OnDemandRays(SPEC, cache_dir=tmp_path, geometry=coarse, tolerance=0.0,
+                          progress=None)
+    loose = OnDemandRays(SPEC, cache_dir=tmp_path, geometry=coarse, tolerance=math.inf,
+                         progress=None)
+    deferring = strict.deferring()
+    assert isinstance(deferring, DeferredRays) and deferring.tolerance == 0.0
+    read, info = deferring.rays(4.0, layers)
+    assert np.array_equal(read, loose.rays(4.0, layers)[0])
+    assert (info["rays_solved"], info["rays_interpolated"]) == (0, 2)
+    assert deferring.solved == 0 and not list(tmp_path.rglob("*.parquet"))
+    (held,) = deferring.deferred
+    assert held["cause"] is None and held["rays"] == 2
+    assert held["largest_error_estimate"] > 0
+    assert not hasattr(strict, "deferred")  # the copy's own list, the solver untouched
+    solved, _ = strict.rays(4.0, layers)
+    assert not np.array_equal(solved, read)
+    again = strict.deferring()
+    got, info = again.rays(4.0, layers)
+    assert np.array_equal(got, solved) and again.deferred == [] and again.solved == 0
+    assert OnDemandRays(SPEC, cache_dir=tmp_path, geometry=None).deferring() is None
 
 
 def test_assembling_names_the_rays_missing(fe_spaces, tmp_path):

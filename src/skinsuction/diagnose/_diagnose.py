@@ -20,8 +20,9 @@ from ._data import MIN_POINTS, prepare_data
 from ._rule import BEYOND_SPACE, decide, eligible
 from ._settings import Settings
 from ._stats import describe_residuals
-from ._steps import (BeyondSpaceError, cause_spaces, fit_baseline, fit_candidate, fit_json,
-                     fitted_skin, intervals_json, residual_dict, start)
+from ._deferred import fit_candidates
+from ._steps import (BeyondSpaceError, fit_baseline, fit_json, fitted_skin, intervals_json,
+                     residual_dict, start)
 from ._pairs import pair_final, second_effect
 from ._summary import summary_text
 from ._window import fit_in_window, ratio_window, widened_window
@@ -66,10 +67,7 @@ def diagnose(data, spaces: dict, settings: Settings | None = None, *, source=Non
     settings = settings or Settings()
     run = start(data, spaces, settings, geometry, on_demand)
     base = fit_baseline(run)
-    candidates, fits = [], {}
-    for name, space in cause_spaces(run, base):
-        candidate, fits[name] = fit_candidate(run, name, space, base)
-        candidates.append(candidate)
+    candidates, fits = fit_candidates(run, base)
     best, cause, verdict, ambiguous, beyond, standing = decide(
         base.test.significant, base.bic, base.bounds, candidates, settings)
     # the intervals of the model the verdict stands on (the others' with intervals="all")

@@ -78,6 +78,14 @@ class Settings:
         Time curves: steps of the FE correction of each fit with creep (FE time
         solves at the fit remove the fast path's error,
         :func:`skinsuction.identify.fe_corrected_fit`); 0: the fast path alone.
+    cause_rays_margin_bic : float or None
+        Rays on demand: each cause is fitted first with its rays read off the
+        geometry spaces whatever their error estimate, and fitted again with the
+        rays over the tolerance solved only where that fit's delta BIC lies below
+        this (the verdict moves only where a cause's BIC falls below the
+        neo-Hookean one's; read rays with estimates up to 18 % moved it by at most
+        0.01 in 28 causes of the layers study: ``docs/diagnosis.md``).  None: every
+        such ray solved at once.
     """
 
     alpha: float = 0.01
@@ -98,6 +106,7 @@ class Settings:
     time_causes: tuple | None = None
     layer_test: bool = True
     fe_correction: int = 2
+    cause_rays_margin_bic: float | None = 2.0
 
     def __post_init__(self):
         if not 0 < self.alpha < 1:
@@ -124,6 +133,9 @@ class Settings:
         if int(self.fe_correction) != self.fe_correction or not 0 <= self.fe_correction <= 5:
             raise ValueError(f"fe_correction must be a whole number of steps in 0..5, got "
                              f"{self.fe_correction!r}")
+        if self.cause_rays_margin_bic is not None and not self.cause_rays_margin_bic >= 0:
+            raise ValueError("cause_rays_margin_bic must be >= 0 or None, got "
+                             f"{self.cause_rays_margin_bic}")
         if self.cause_window_decades is not None and not self.cause_window_decades > 0:
             raise ValueError("cause_window_decades must be positive or None, got "
                              f"{self.cause_window_decades}")

@@ -36,6 +36,8 @@ Modules:
   their nodes;
 * ``_on_demand``: rays at a measurement's own probe and layers, solved on
   demand and cached (:class:`OnDemandRays`);
+* ``_deferred``: rays read first, solved only where a fit shows they matter
+  (:class:`DeferredRays`);
 * ``_geometry_space``: the neo-Hookean rays over the subject's geometry, read
   by interpolation (:class:`GeometrySpace`); rays on demand read it first;
 * ``_geometry``: the spaces of one measurement (:func:`spaces_at`);
@@ -92,6 +94,7 @@ from ._lagrange import LagrangeAxis
 from ._load_axis import LoadAxis
 from ._coordinates import SpaceCoordinates, load, reference_pressure, similar_length
 from ._on_demand import LAYER_PATHS, OnDemandRays, default_cache_dir, layer_thicknesses
+from ._deferred import DeferredRays
 from ._open import GEOMETRIES_KEPT, LoadedSpace, ProbeSpace, load_space
 from ._neo_hookean_slice import NeoHookeanSlice, TabulatedInterpolant
 from ._ray_interpolate import RayInterpolant, read_at_once
@@ -222,7 +225,7 @@ __all__ = [
     "parse_ray_id", "ray_bundles", "ray_id", "rays_of", "read_ray_space", "read_ray_spaces",
     "NeoHookeanSlice", "RayInterpolant", "TabulatedInterpolant", "read_at_once",
     # every probe and the subject's layers
-    "DEFAULT_LAYERS_MM", "Geometry", "GeometryOutsideSpace", "OnDemandRays",
+    "DEFAULT_LAYERS_MM", "Geometry", "GeometryOutsideSpace", "OnDemandRays", "DeferredRays",
     "default_cache_dir", "spaces_at", "fit_reach_mm", "FIT_REACH", "ThicknessNuisance", "window_nodes",
     "GEOMETRY_FOLDER", "GeometryGrid", "GeometrySpace", "assemble_geometry_space",
     "default_geometry_file", "read_geometry_space", "same_rays", "ship_geometry_space",

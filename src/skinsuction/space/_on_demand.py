@@ -345,6 +345,14 @@ class OnDemandRays:
         out.tolerance = out.move_tolerance = math.inf
         return out
 
+    def deferring(self):
+        """A copy that reads every ray the geometry spaces hold and lists, not solves,
+        those over the tolerance (:class:`DeferredRays`); None without a geometry
+        space (every ray is solved: there is nothing to read first)."""
+        from ._deferred import DeferredRays
+
+        return DeferredRays.of(self) if self.geometry is not None else None
+
     def cause_geometry(self, cause):
         """The geometry space of a cause (not a thickness), or None where there is none."""
         if cause.name not in self._cause_spaces:
@@ -367,14 +375,19 @@ class OnDemandRays:
         info.update(cache="geometry space", rays_interpolated=len(nodes) - len(uncertain),
                     rays_solved=len(uncertain), largest_error_estimate=float(np.max(est)))
         if uncertain:
-            solved, sinfo = self._read_cache(ref, a, cause, c, [nodes[k] for k in uncertain])
-            m[uncertain] = solved
-            info.update(cache=sinfo["cache"], stopped_early=int(
-                np.isnan(m[:, 0, -1]).sum()))
+            self._settle(ref, a, cause, c, [nodes[k] for k in uncertain], m, uncertain, info)
         return m, info
 
-    def _read_cache(self, ref, a, cause, c, nodes):
-        """The rays at ``ref`` scaled by ``a`` from the cache file, solved first if missing."""
+    def _settle(self, ref, a, cause, c, nodes, m, rows, info):
+        """The rays ``nodes`` read with an error estimate over the tolerance (rows ``rows``
+        of ``m``, in place): from the cache, solved first where missing."""
+        solved, sinfo = self._read_cache(ref, a, cause, c, nodes)
+        m[rows] = solved
+        info.update(cache=sinfo["cache"], stopped_early=int(np.isnan(m[:, 0, -1]).sum()))
+
+    def _read_cache(self, ref, a, cause, c, nodes, solve: bool = True):
+        """The rays at ``ref`` scaled by ``a`` from the cache file, solved first if missing
+        (``solve=False``: None where any is missing)."""
         stem = "td{t_d:g}_th{t_h:g}".format(**_keywords(ref))
         if cause is None:
             path = self.dir / f"{stem}.parquet"
@@ -385,10 +398,14 @@ class OnDemandRays:
             path = self.dir / f"{stem}__{cause.keyword}{coord:g}.parquet"
         ids = self._ray_ids(2.0, ref, cause, coord, nodes)
         if not path.exists():
+            if not solve:
+                return None
             self._solve(path, ids, ref)
         frame, meta = _read_parquet(path)
         solved = set(frame["ray_id"])
         missing = [rid for rid in ids if rid not in solved]
+        if missing and not solve:
+            return None
         if missing:  # other X1h/X1d nodes than those solved before: add them to the file
             extra = path.with_name(f"{path.stem}.extra.parquet")
             self._solve(extra, missing, ref)
