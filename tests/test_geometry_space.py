@@ -172,7 +172,7 @@ def test_deferred_rays_beyond_the_tolerance_come_from_the_cache_else_stay_as_rea
                           progress=None)
     loose = OnDemandRays(SPEC, cache_dir=tmp_path, geometry=coarse, tolerance=math.inf,
                          progress=None)
-    deferring = strict.deferring()
+    deferring = DeferredRays.of(strict)
     assert isinstance(deferring, DeferredRays) and deferring.tolerance == 0.0
     read, info = deferring.rays(4.0, layers)
     assert np.array_equal(read, loose.rays(4.0, layers)[0])
@@ -184,10 +184,10 @@ def test_deferred_rays_beyond_the_tolerance_come_from_the_cache_else_stay_as_rea
     assert not hasattr(strict, "deferred")  # the copy's own list, the solver untouched
     solved, _ = strict.rays(4.0, layers)
     assert not np.array_equal(solved, read)
-    again = strict.deferring()
+    again = DeferredRays.of(strict)
     got, info = again.rays(4.0, layers)
     assert np.array_equal(got, solved) and again.deferred == [] and again.solved == 0
-    assert OnDemandRays(SPEC, cache_dir=tmp_path, geometry=None).deferring() is None
+    assert DeferredRays.of(OnDemandRays(SPEC, cache_dir=tmp_path, geometry=None)) is None
 
 
 def test_assembling_names_the_rays_missing(fe_spaces, tmp_path):

@@ -4,7 +4,7 @@ A cause's ray read off its geometry space with an error estimate over the tolera
 is solved by FE (tens of CPU-s a set over a thin dermis).  Most such solves change
 nothing: a cause the data do not ask for fits at or near its neutral node, far
 from any BIC that could change the verdict.  So each cause is fitted with its rays
-as read (:meth:`skinsuction.space.OnDemandRays.deferring`), and fitted again with them
+as read (:class:`skinsuction.space.DeferredRays`), and fitted again with them
 solved only where that fit's delta BIC lies below ``Settings.cause_rays_margin_bic``:
 the verdict moves only where a cause's BIC falls below the neo-Hookean one's (the
 model it stands on) or by ``delta_bic`` under it (decisive), and a margin above 0
@@ -18,7 +18,7 @@ from __future__ import annotations
 import copy
 import itertools
 
-from skinsuction.space import BASELINE
+from skinsuction.space import BASELINE, DeferredRays
 
 from ._steps import cause_spaces, fit_candidate
 from ._window import ratio_window
@@ -42,8 +42,8 @@ def fit_candidates(run, base) -> tuple:
         tolerance), and ``{cause: Fit}``.
     """
     strict, margin = run.on_demand, run.settings.cause_rays_margin_bic
-    deferring = (strict.deferring() if margin is not None and run.windowed
-                 and hasattr(strict, "deferring") else None)
+    deferring = (DeferredRays.of(strict) if margin is not None and run.windowed
+                 else None)
     candidates, fits = [], {}
     if deferring is None:
         for name, space in cause_spaces(run, base):

@@ -41,8 +41,16 @@ class DeferredRays(OnDemandRays):
     deferred: list
 
     @classmethod
-    def of(cls, solver: OnDemandRays) -> "DeferredRays":
-        """A deferring copy of ``solver`` (same specification, cache, spaces and tolerance)."""
+    def of(cls, solver):
+        """A deferring copy of ``solver`` (same specification, cache, spaces and
+        tolerance); None where it has no geometry space (every ray is solved: there is
+        nothing to read first).  A solver of another kind gives its own view, its
+        ``deferring()``, if it has one (else None)."""
+        if not isinstance(solver, OnDemandRays):
+            own = getattr(solver, "deferring", None)
+            return own() if callable(own) else None
+        if solver.geometry is None:
+            return None
         out = copy.copy(solver)
         out.__class__ = cls
         out.deferred, out.solved, out.interpolated = [], 0, 0

@@ -345,14 +345,6 @@ class OnDemandRays:
         out.tolerance = out.move_tolerance = math.inf
         return out
 
-    def deferring(self):
-        """A copy that reads every ray the geometry spaces hold and lists, not solves,
-        those over the tolerance (:class:`DeferredRays`); None without a geometry
-        space (every ray is solved: there is nothing to read first)."""
-        from ._deferred import DeferredRays
-
-        return DeferredRays.of(self) if self.geometry is not None else None
-
     def cause_geometry(self, cause):
         """The geometry space of a cause (not a thickness), or None where there is none."""
         if cause.name not in self._cause_spaces:
