@@ -8,7 +8,8 @@ as read (:class:`skinsuction.space.DeferredRays`), and fitted again with them
 solved only where that fit's delta BIC lies below ``Settings.cause_rays_margin_bic``:
 the verdict moves only where a cause's BIC falls below the neo-Hookean one's (the
 model it stands on) or by ``delta_bic`` under it (decisive), and a margin above 0
-covers what the rays' error can move it (``docs/diagnosis.md``, "Rays read first").
+covers what the rays' error can move it (``docs/diagnosis.md``, "A cause's rays read
+first").
 The refit draws the same seeds as the first fit, so a cause solved is the fit it
 was before this step existed.
 """
